@@ -1,0 +1,83 @@
+#include "cli.h"
+#include "registry.h"
+
+#include <cstdio>
+#include <iostream>
+
+#include <unistd.h>
+
+namespace vtex::cli {
+
+std::vector<std::pair<int, CommandFactory>>& commandRegistry() {
+    static std::vector<std::pair<int, CommandFactory>> registry;
+    return registry;
+}
+
+bool registerCommand(int order, CommandFactory factory) {
+    commandRegistry().emplace_back(order, std::move(factory));
+    return true;
+}
+
+void status(const GlobalOptions& options, const std::string& line) {
+    if (options.verbosity() != Verbosity::Quiet) std::cerr << line << '\n';
+}
+
+void warning(const GlobalOptions& options, const std::string& line) {
+    if (options.verbosity() != Verbosity::Quiet) std::cerr << "vtex: warning: " << line << '\n';
+}
+
+TerminalProgress::TerminalProgress(const GlobalOptions& options)
+    : mEnabled(options.verbosity() != Verbosity::Quiet && ::isatty(STDERR_FILENO) == 1) {}
+
+TerminalProgress::~TerminalProgress() {
+    if (mDrawn) std::fputc('\n', stderr);
+}
+
+void TerminalProgress::start(std::string_view phase, std::uint64_t total) {
+    std::lock_guard lock(mMutex);
+    if (mDrawn) std::fputc('\n', stderr);
+    mDrawn = false;
+    mPhase = phase;
+    mTotal = total;
+    mDone = 0;
+    mStart = mLastDraw = std::chrono::steady_clock::now();
+}
+
+void TerminalProgress::advance(std::uint64_t units) {
+    std::lock_guard lock(mMutex);
+    mDone += units;
+    // A bar only for work that takes more than a second, redrawn at most 10 times a second.
+    const auto now = std::chrono::steady_clock::now();
+    if (now - mStart < std::chrono::seconds(1) || now - mLastDraw < std::chrono::milliseconds(100))
+        return;
+    mLastDraw = now;
+    draw(false);
+}
+
+void TerminalProgress::finish() {
+    std::lock_guard lock(mMutex);
+    if (mDrawn) {
+        mDone = mTotal;
+        draw(true);
+        std::fputc('\n', stderr);
+        mDrawn = false;
+    }
+}
+
+void TerminalProgress::draw(bool final) {
+    if (!mEnabled) return;
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count();
+    const double fraction = mTotal > 0 ? std::min(1.0, double(mDone) / double(mTotal)) : 0.0;
+    const double remaining = fraction > 0 ? elapsed * (1 - fraction) / fraction : 0.0;
+    constexpr int kWidth = 30;
+    const int filled = int(fraction * kWidth);
+    std::fprintf(stderr, "\r%-12.12s [%s%s] %5.1f%%  %6.1fs elapsed", mPhase.c_str(),
+                 std::string(filled, '=').c_str(), std::string(kWidth - filled, ' ').c_str(),
+                 100 * fraction, elapsed);
+    if (!final) std::fprintf(stderr, "  %6.1fs left", remaining);
+    std::fflush(stderr);
+    mDrawn = true;
+}
+
+}  // namespace vtex::cli

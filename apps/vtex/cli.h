@@ -1,0 +1,67 @@
+/// @file
+/// @brief What every `vtex` subcommand shares: registration, verbosity, progress on a terminal.
+///
+/// A subcommand lives in its own cmd_<name>.cpp, declares its flags on the CLI::App it is
+/// given, and returns the action to run after parsing. Actions throw vtex::InputError for bad
+/// input (exit 3), vtex::IoError or anything else for other failures (exit 1); main() maps
+/// them. No algorithm lives in apps/: actions call the stage libraries.
+#pragma once
+
+#include <vtex/core/progress.h>
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+
+namespace vtex::cli {
+
+enum class Verbosity { Quiet, Normal, Verbose };
+
+/// Options every subcommand understands (given before or after the subcommand name).
+struct GlobalOptions {
+    bool quiet = false;
+    bool verbose = false;
+    Verbosity verbosity() const {
+        return quiet ? Verbosity::Quiet : verbose ? Verbosity::Verbose : Verbosity::Normal;
+    }
+};
+
+using Action = std::function<void(const GlobalOptions&)>;
+using CommandFactory = std::function<Action(CLI::App& app)>;
+
+/// Registers a subcommand; called from a static initialiser in each cmd_<name>.cpp. `order`
+/// sorts the subcommands in `vtex --help` by pipeline stage.
+bool registerCommand(int order, CommandFactory factory);
+
+/// Status lines and warnings go to stderr; stdout carries only what was asked for.
+void status(const GlobalOptions& options, const std::string& line);
+void warning(const GlobalOptions& options, const std::string& line);
+
+/// Draws one line on stderr (phase, percent, elapsed, remaining) when stderr is a terminal
+/// and the user did not ask for --quiet; otherwise silent.
+class TerminalProgress final : public Progress {
+public:
+    explicit TerminalProgress(const GlobalOptions& options);
+    ~TerminalProgress() override;
+    void start(std::string_view phase, std::uint64_t total) override;
+    void advance(std::uint64_t units) override;
+    void finish() override;
+
+private:
+    void draw(bool final);
+
+    bool mEnabled;
+    std::mutex mMutex;
+    std::string mPhase;
+    std::uint64_t mTotal = 0;
+    std::uint64_t mDone = 0;
+    std::chrono::steady_clock::time_point mStart;
+    std::chrono::steady_clock::time_point mLastDraw;
+    bool mDrawn = false;
+};
+
+}  // namespace vtex::cli

@@ -1,0 +1,48 @@
+/// @file
+/// @brief Output files that appear whole or not at all.
+///
+/// Every artifact vtex writes goes through AtomicOutputFile: the bytes go to a uniquely named
+/// temporary beside the target (same directory, so the final rename never crosses a file
+/// system), which is flushed to disk and renamed over the target by commit(). A writer that
+/// throws, or a process killed mid-write, leaves the target untouched; the destructor removes
+/// an uncommitted temporary.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+#include <string_view>
+
+namespace vtex {
+
+class AtomicOutputFile {
+public:
+    /// Creates the temporary now, so an unwritable destination fails before any work.
+    /// Throws IoError.
+    explicit AtomicOutputFile(std::filesystem::path target);
+    ~AtomicOutputFile();
+
+    AtomicOutputFile(const AtomicOutputFile&) = delete;
+    AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
+
+    /// A binary stream on the temporary, for writers that take a std::ostream.
+    std::ostream& stream();
+
+    /// The temporary's path, for libraries that insist on opening a file name themselves
+    /// (tinygltf, OpenEXR). Do not mix with stream().
+    const std::filesystem::path& temporaryPath() const { return mTemporary; }
+    const std::filesystem::path& target() const { return mTarget; }
+
+    /// Flushes to disk and renames the temporary over the target. Throws IoError.
+    void commit();
+
+private:
+    std::filesystem::path mTarget;
+    std::filesystem::path mTemporary;
+    std::ofstream mStream;
+    bool mCommitted = false;
+};
+
+/// Writes `bytes` to `target` atomically. Throws IoError.
+void writeFileAtomically(const std::filesystem::path& target, std::string_view bytes);
+
+}  // namespace vtex

@@ -1,0 +1,87 @@
+#include <vtex/core/atomic_file.h>
+#include <vtex/core/error.h>
+
+#include <cerrno>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace vtex {
+namespace {
+
+std::string systemError() { return std::strerror(errno); }
+
+// fsync through a fresh descriptor: std::ofstream does not expose its own.
+void syncPath(const std::filesystem::path& path, bool isDirectory) {
+    const int fd = ::open(path.c_str(), (isDirectory ? O_DIRECTORY : 0) | O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw IoError(path, "cannot open for syncing: " + systemError());
+    const int status = ::fsync(fd);
+    const std::string reason = status != 0 ? systemError() : std::string();
+    ::close(fd);
+    // Some file systems (tmpfs, some FUSE mounts) refuse fsync on directories; the rename is
+    // atomic all the same.
+    if (status != 0 && !isDirectory) throw IoError(path, "cannot flush to disk: " + reason);
+}
+
+}  // namespace
+
+AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::move(target)) {
+    if (mTarget.empty()) throw IoError(mTarget, "empty output path");
+    if (std::filesystem::is_directory(mTarget))
+        throw IoError(mTarget, "is a directory, expected a file name");
+    std::filesystem::path directory = mTarget.parent_path();
+    if (directory.empty()) directory = ".";
+    if (!std::filesystem::is_directory(directory))
+        throw IoError(mTarget, "output directory does not exist");
+
+    // Hidden, and named after the target, so a stray temporary is easy to attribute.
+    std::string pattern = (directory / ("." + mTarget.filename().string() + ".tmp.XXXXXX")).string();
+    std::vector<char> buffer(pattern.begin(), pattern.end());
+    buffer.push_back('\0');
+    const int fd = ::mkstemp(buffer.data());
+    if (fd < 0) throw IoError(mTarget, "cannot create a temporary file beside it: " + systemError());
+    ::close(fd);
+    mTemporary = buffer.data();
+}
+
+AtomicOutputFile::~AtomicOutputFile() {
+    if (mCommitted) return;
+    if (mStream.is_open()) mStream.close();
+    std::error_code ignored;
+    std::filesystem::remove(mTemporary, ignored);
+}
+
+std::ostream& AtomicOutputFile::stream() {
+    if (!mStream.is_open()) {
+        mStream.open(mTemporary, std::ios::binary | std::ios::trunc);
+        if (!mStream) throw IoError(mTemporary, "cannot open temporary file for writing");
+    }
+    return mStream;
+}
+
+void AtomicOutputFile::commit() {
+    if (mCommitted) return;
+    if (mStream.is_open()) {
+        mStream.flush();
+        const bool failed = !mStream;
+        mStream.close();
+        if (failed || mStream.fail()) throw IoError(mTarget, "write failed (disk full?)");
+    }
+    syncPath(mTemporary, false);
+    if (::rename(mTemporary.c_str(), mTarget.c_str()) != 0)
+        throw IoError(mTarget, "cannot move the finished file into place: " + systemError());
+    mCommitted = true;
+    std::filesystem::path directory = mTarget.parent_path();
+    syncPath(directory.empty() ? std::filesystem::path(".") : directory, true);
+}
+
+void writeFileAtomically(const std::filesystem::path& target, std::string_view bytes) {
+    AtomicOutputFile file(target);
+    file.stream().write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    file.commit();
+}
+
+}  // namespace vtex

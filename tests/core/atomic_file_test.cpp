@@ -1,0 +1,76 @@
+#include <vtex/core/atomic_file.h>
+#include <vtex/core/error.h>
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path freshDirectory(const std::string& name) {
+    fs::path dir = fs::path(VTEX_TEST_TMP) / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string readAll(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream out;
+    out << in.rdbuf();
+    return out.str();
+}
+
+std::size_t entryCount(const fs::path& dir) {
+    return std::distance(fs::directory_iterator(dir), fs::directory_iterator());
+}
+
+}  // namespace
+
+TEST(AtomicOutputFile, CommitPutsTheWholeFileInPlaceAndLeavesNoTemporary) {
+    const fs::path dir = freshDirectory("commit");
+    vtex::writeFileAtomically(dir / "out.bin", std::string("hello\0world", 11));
+    EXPECT_EQ(readAll(dir / "out.bin"), std::string("hello\0world", 11));
+    EXPECT_EQ(entryCount(dir), 1u);
+}
+
+TEST(AtomicOutputFile, AWriterThatThrowsLeavesTheOldTargetUntouched) {
+    const fs::path dir = freshDirectory("abandon");
+    vtex::writeFileAtomically(dir / "out.txt", "old");
+    try {
+        vtex::AtomicOutputFile file(dir / "out.txt");
+        file.stream() << "half of the new conte";
+        throw std::runtime_error("writer failed");
+    } catch (const std::runtime_error&) {
+    }
+    EXPECT_EQ(readAll(dir / "out.txt"), "old");
+    EXPECT_EQ(entryCount(dir), 1u) << "the temporary was not removed";
+}
+
+TEST(AtomicOutputFile, TheTargetDoesNotExistUntilCommit) {
+    const fs::path dir = freshDirectory("pending");
+    vtex::AtomicOutputFile file(dir / "out.txt");
+    file.stream() << "data";
+    file.stream().flush();
+    EXPECT_FALSE(fs::exists(dir / "out.txt"));
+    EXPECT_EQ(file.temporaryPath().parent_path(), dir) << "temporary must be beside the target";
+    file.commit();
+    EXPECT_EQ(readAll(dir / "out.txt"), "data");
+}
+
+TEST(AtomicOutputFile, ALibraryCanWriteThroughTheTemporaryPath) {
+    const fs::path dir = freshDirectory("by_name");
+    vtex::AtomicOutputFile file(dir / "image.exr");
+    std::ofstream(file.temporaryPath()) << "pixels";
+    file.commit();
+    EXPECT_EQ(readAll(dir / "image.exr"), "pixels");
+}
+
+TEST(AtomicOutputFile, AMissingDirectoryIsRefusedBeforeAnyWork) {
+    const fs::path dir = freshDirectory("missing");
+    EXPECT_THROW(vtex::AtomicOutputFile{dir / "no" / "such" / "dir" / "out.txt"}, vtex::IoError);
+    EXPECT_THROW(vtex::AtomicOutputFile{dir}, vtex::IoError);
+}
