@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <map>
 
 #include <unistd.h>
 
@@ -16,6 +17,24 @@ std::vector<std::pair<int, CommandFactory>>& commandRegistry() {
 bool registerCommand(int order, CommandFactory factory) {
     commandRegistry().emplace_back(order, std::move(factory));
     return true;
+}
+
+namespace {
+std::map<std::string, Inspector>& inspectorRegistry() {
+    static std::map<std::string, Inspector> registry;
+    return registry;
+}
+}  // namespace
+
+bool registerInspector(const std::string& extension, Inspector inspector) {
+    inspectorRegistry()[extension] = std::move(inspector);
+    return true;
+}
+
+const Inspector* findInspector(const std::string& extension) {
+    const auto& registry = inspectorRegistry();
+    const auto found = registry.find(extension);
+    return found == registry.end() ? nullptr : &found->second;
 }
 
 void status(const GlobalOptions& options, const std::string& line) {

@@ -12,6 +12,8 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <filesystem>
+#include <ostream>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -36,6 +38,13 @@ using CommandFactory = std::function<Action(CLI::App& app)>;
 /// Registers a subcommand; called from a static initialiser in each cmd_<name>.cpp. `order`
 /// sorts the subcommands in `vtex --help` by pipeline stage.
 bool registerCommand(int order, CommandFactory factory);
+
+/// How `vtex inspect` summarises one kind of file; registered per file extension (".glb",
+/// ".vtl", ...) from a cmd_inspect_<kind>.cpp. Writes a human summary, or JSON when `json`,
+/// to `out`; throws vtex::InputError for a file it cannot read.
+using Inspector = std::function<void(const std::filesystem::path& file, bool json, std::ostream& out)>;
+bool registerInspector(const std::string& extension, Inspector inspector);
+const Inspector* findInspector(const std::string& extension);
 
 /// Status lines and warnings go to stderr; stdout carries only what was asked for.
 void status(const GlobalOptions& options, const std::string& line);

@@ -38,7 +38,10 @@ AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::
         throw IoError(mTarget, "output directory does not exist");
 
     // Hidden, and named after the target, so a stray temporary is easy to attribute.
-    std::string pattern = (directory / ("." + mTarget.filename().string() + ".tmp.XXXXXX")).string();
+    std::string name = ".";
+    name += mTarget.filename().string();
+    name += ".tmp.XXXXXX";
+    const std::string pattern = (directory / name).string();
     std::vector<char> buffer(pattern.begin(), pattern.end());
     buffer.push_back('\0');
     const int fd = ::mkstemp(buffer.data());

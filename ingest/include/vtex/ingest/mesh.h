@@ -1,0 +1,43 @@
+/// @file
+/// @brief The canonical triangle mesh that ingest produces and every later stage reads.
+///
+/// World (source) units, right-handed, triangles counter-clockwise seen from the side their
+/// normal points to. A mesh that passed ingest holds no NaN/Inf, no index out of range, no
+/// zero-area triangle; `closed` says whether it is watertight and oriented outward.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace vtex::ingest {
+
+/// A decoded base-colour texture: 8-bit RGBA, rows top to bottom, sRGB-encoded as glTF stores
+/// base colour (convert to linear before averaging).
+struct Image {
+    int width = 0;
+    int height = 0;
+    std::vector<std::uint8_t> rgba;  ///< width · height · 4 bytes
+};
+
+struct Material {
+    /// glTF baseColorFactor, linear RGBA.
+    Eigen::Vector4f baseColorFactor{1.0f, 1.0f, 1.0f, 1.0f};
+    /// Index into TriangleMesh::textures, or -1 for none; sampled at the vertex UVs.
+    int baseColorTexture = -1;
+};
+
+struct TriangleMesh {
+    std::vector<Eigen::Vector3f> positions;
+    std::vector<Eigen::Vector3f> normals;     ///< unit, one per position
+    std::vector<Eigen::Vector2f> uvs;         ///< empty, or one per position (glTF convention)
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    std::vector<std::uint32_t> triangleMaterials;  ///< empty (all use material 0) or one per triangle
+    std::vector<Material> materials;               ///< at least one once ingested
+    std::vector<Image> textures;
+    bool closed = false;  ///< watertight and consistently oriented outward
+};
+
+}  // namespace vtex::ingest
