@@ -1,0 +1,93 @@
+// Internal interface between the readers, the repair pass and the writers of vtex_ingest.
+// Not installed: the fuzz targets and the tests include it through the source tree.
+#pragma once
+
+#include <vtex/ingest/ingest.h>
+#include <vtex/ingest/mesh.h>
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vtex::ingest::detail {
+
+/// What a reader hands to the repair pass: a triangle soup in world units with optional
+/// per-vertex attributes. Indices are already checked against positions.size() (a reader
+/// refuses or, with dropInvalidFaces, drops and counts a face that is not).
+struct RawMesh {
+    std::vector<Eigen::Vector3f> positions;
+    /// Empty, or one per position; a non-finite or zero normal means "none, compute one".
+    std::vector<Eigen::Vector3f> normals;
+    std::vector<Eigen::Vector2f> uvs;  ///< empty, or one per position
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    std::vector<std::uint32_t> triangleMaterials;  ///< empty, or one per triangle
+    /// Empty (every triangle is a face of its own), or per source polygon the number of
+    /// consecutive triangles its fan from the first corner produced (base meshes need quads).
+    std::vector<std::uint32_t> polygonTriangles;
+    std::vector<Material> materials;
+    std::vector<Image> textures;
+    std::vector<std::string> warnings;
+    RepairCounts repairs;  ///< the counts a reader already knows (invalidIndexFaces)
+    std::string format;
+};
+
+/// Reads a whole regular file of at most `maxBytes` bytes. Throws InputError.
+std::string readFileBounded(const std::filesystem::path& file, std::uint64_t maxBytes);
+
+/// True when `candidate`, resolved through symbolic links, lies inside the directory `root`
+/// (itself canonical) and is a regular file.
+bool isContainedRegularFile(const std::filesystem::path& root, const std::filesystem::path& candidate);
+
+// --- readers -----------------------------------------------------------------------------
+// `file` names the input in error messages; `directory` is the folder external references may
+// be read from (empty: none may be read, as for fuzzing from memory).
+
+RawMesh readGltf(std::string_view bytes, bool binary, const std::filesystem::path& file,
+                 const std::filesystem::path& directory, const IngestOptions& options);
+
+RawMesh readObj(std::string_view text, const std::filesystem::path& file,
+                const std::filesystem::path& directory, const IngestOptions& options);
+
+/// OFF, PLY and STL through OpenMesh, after checking the sizes the header claims against the
+/// bytes present.
+RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format,
+                         const std::filesystem::path& file, const IngestOptions& options);
+
+/// Checks the element counts an OFF/PLY/STL header claims against the file's size, so that
+/// OpenMesh never reserves memory for elements that are not there. Throws InputError.
+void precheckOpenMeshInput(std::string_view bytes, const std::string& format,
+                           const std::filesystem::path& file, const IngestOptions& options);
+
+// --- repair ------------------------------------------------------------------------------
+
+/// Non-finite faces, welding, degenerate and zero-area faces, normals, closedness and
+/// outward orientation. Fills the counts and bounds of `report`. Throws InputError when no
+/// triangle survives.
+TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file,
+                        const IngestOptions& options, IngestReport& report);
+
+/// Orients a closed, edge-manifold triangle mesh outward with CGAL Polygon Mesh Processing.
+/// Returns, per triangle, whether it must be reversed; nullopt when CGAL finds the mesh not
+/// closed or not orientable (then nothing is changed). Lives in its own translation unit
+/// because CGAL adds -frounding-math.
+std::optional<std::vector<char>> computeOutwardFlips(
+    const std::vector<Eigen::Vector3d>& points,
+    const std::vector<std::array<std::uint32_t, 3>>& triangles);
+
+// --- images ------------------------------------------------------------------------------
+
+/// Decodes a PNG or JPEG (by signature) to 8-bit RGBA after checking the declared size
+/// against the caps. Returns nullopt and sets `why` for anything it cannot or will not decode.
+std::optional<Image> decodeImage(std::string_view bytes, const IngestOptions& options,
+                                 std::string& why);
+
+/// Encodes 8-bit RGBA as PNG. Throws std::runtime_error on a libpng failure.
+std::string encodePng(const Image& image);
+
+}  // namespace vtex::ingest::detail

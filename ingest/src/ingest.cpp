@@ -1,0 +1,132 @@
+// loadMesh(): dispatch by extension, bounded file reading, the report.
+#include "detail.h"
+
+#include <vtex/core/error.h>
+#include <vtex/core/progress.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+
+namespace vtex::ingest {
+namespace detail {
+
+namespace fs = std::filesystem;
+
+std::string readFileBounded(const fs::path& file, std::uint64_t maxBytes) {
+    std::error_code error;
+    const auto status = fs::status(file, error);
+    if (error || !fs::exists(status)) throw InputError(file, "no such file");
+    if (!fs::is_regular_file(status)) throw InputError(file, "not a regular file");
+    const std::uint64_t size = fs::file_size(file, error);
+    if (error) throw InputError(file, "cannot read its size: " + error.message());
+    if (size > maxBytes)
+        throw InputError(file, "file of " + std::to_string(size) + " bytes exceeds the limit of " +
+                                   std::to_string(maxBytes));
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(file, "cannot open for reading");
+    std::string bytes(size, '\0');
+    in.read(bytes.data(), std::streamsize(size));
+    if (std::uint64_t(in.gcount()) != size) throw InputError(file, "short read (file changed while reading?)");
+    return bytes;
+}
+
+bool isContainedRegularFile(const fs::path& root, const fs::path& candidate) {
+    std::error_code error;
+    const fs::path resolved = fs::canonical(candidate, error);  // follows every symbolic link
+    if (error) return false;
+    if (!fs::is_regular_file(resolved, error) || error) return false;
+    auto r = root.begin();
+    auto c = resolved.begin();
+    for (; r != root.end(); ++r, ++c)
+        if (c == resolved.end() || *r != *c) return false;
+    return c != resolved.end();
+}
+
+}  // namespace detail
+
+namespace {
+
+std::string lowerExtension(const std::filesystem::path& file) {
+    std::string extension = file.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    return extension;
+}
+
+void phase(const IngestOptions& options, const char* name) {
+    if (options.progress) {
+        options.progress->start(name, 1);
+        options.progress->advance(1);
+        options.progress->finish();
+    }
+}
+
+}  // namespace
+
+TriangleMesh loadMesh(const std::filesystem::path& file) { return loadMesh(file, IngestOptions{}); }
+
+TriangleMesh loadMesh(const std::filesystem::path& file, const IngestOptions& options, IngestReport* report) {
+    const auto start = std::chrono::steady_clock::now();
+    IngestReport local;
+    IngestReport& r = report ? *report : local;
+    r = IngestReport{};
+    r.file = file.string();
+
+    const std::string extension = lowerExtension(file);
+    const std::filesystem::path directory = file.parent_path().empty() ? "." : file.parent_path();
+    detail::RawMesh raw;
+    phase(options, "reading");
+    if (extension == ".gltf" || extension == ".glb") {
+        const std::string bytes = detail::readFileBounded(file, options.maxFileBytes);
+        raw = detail::readGltf(bytes, extension == ".glb", file, directory, options);
+    } else if (extension == ".obj") {
+        const std::string bytes = detail::readFileBounded(file, options.maxFileBytes);
+        raw = detail::readObj(bytes, file, directory, options);
+    } else if (extension == ".off" || extension == ".ply" || extension == ".stl") {
+        const std::string bytes = detail::readFileBounded(file, options.maxFileBytes);
+        raw = detail::readWithOpenMesh(bytes, extension.substr(1), file, options);
+    } else {
+        throw InputError(file, "unknown mesh format '" + extension +
+                                   "' (expected .gltf, .glb, .obj, .off, .ply or .stl)");
+    }
+    r.format = raw.format;
+    phase(options, "repairing");
+    TriangleMesh mesh = detail::repairMesh(std::move(raw), file, options, r);
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return mesh;
+}
+
+std::string toJson(const IngestReport& r) {
+    using nlohmann::json;
+    json j;
+    j["file"] = r.file;
+    j["format"] = r.format;
+    j["vertices_in"] = r.verticesIn;
+    j["triangles_in"] = r.trianglesIn;
+    j["vertices_out"] = r.verticesOut;
+    j["triangles_out"] = r.trianglesOut;
+    j["materials"] = r.materials;
+    j["textures"] = r.textures;
+    j["bounds"] = {{"min", {r.boundsMin.x(), r.boundsMin.y(), r.boundsMin.z()}},
+                   {"max", {r.boundsMax.x(), r.boundsMax.y(), r.boundsMax.z()}}};
+    j["closed"] = r.closed;
+    const RepairCounts& c = r.repairs;
+    j["repairs"] = {{"invalid_index_faces", c.invalidIndexFaces},
+                    {"non_finite_faces", c.nonFiniteFaces},
+                    {"degenerate_faces", c.degenerateFaces},
+                    {"zero_area_faces", c.zeroAreaFaces},
+                    {"merged_vertices", c.mergedVertices},
+                    {"unreferenced_vertices", c.unreferencedVertices},
+                    {"recomputed_normals", c.recomputedNormals},
+                    {"flipped_normals", c.flippedNormals},
+                    {"flipped_faces", c.flippedFaces}};
+    j["warnings"] = r.warnings;
+    j["seconds"] = r.seconds;
+    // Untrusted text (file names, warnings) may hold invalid UTF-8: replace, never throw.
+    return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
+}
+
+}  // namespace vtex::ingest

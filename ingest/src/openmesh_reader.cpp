@@ -1,0 +1,342 @@
+// OFF, PLY and STL through OpenMesh 9, behind a pre-check of what each header claims.
+//
+// OpenMesh's readers trust their headers: they reserve memory for the element counts an OFF
+// or PLY header states and size a vector by each face's stated corner count. So before
+// OpenMesh sees a byte, precheckOpenMeshInput() checks that the counts fit in the bytes
+// present and walks the records that carry counts (OFF faces, PLY lists), bounding each by
+// what the file can hold. Invalid vertex indices are skipped by OpenMesh's importer.
+#include "detail.h"
+
+#include <vtex/core/error.h>
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
+
+#include <algorithm>
+#include <charconv>
+#include <cstring>
+#include <sstream>
+
+namespace vtex::ingest::detail {
+namespace {
+
+namespace fs = std::filesystem;
+using PolyMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
+
+bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+// A cursor over whitespace-separated tokens that also knows about lines and '#' comments.
+class Tokens {
+public:
+    explicit Tokens(std::string_view text) : mText(text) {}
+    std::string_view next() {
+        skip();
+        std::size_t end = mAt;
+        while (end < mText.size() && !isSpace(mText[end])) ++end;
+        std::string_view token = mText.substr(mAt, end - mAt);
+        mAt = end;
+        return token;
+    }
+    // The rest of the current line, consumed (comments removed).
+    std::string_view line() {
+        while (true) {
+            while (mAt < mText.size() && isSpace(mText[mAt])) ++mAt;
+            std::size_t end = mText.find('\n', mAt);
+            if (end == std::string_view::npos) end = mText.size();
+            std::string_view l = mText.substr(mAt, end - mAt);
+            mAt = std::min(end + 1, mText.size());
+            if (const auto hash = l.find('#'); hash != std::string_view::npos) l = l.substr(0, hash);
+            if (!l.empty() || mAt >= mText.size()) return l;
+        }
+    }
+    std::size_t position() const { return mAt; }
+    bool done() {
+        skip();
+        return mAt >= mText.size();
+    }
+
+private:
+    void skip() {
+        while (mAt < mText.size()) {
+            if (isSpace(mText[mAt])) ++mAt;
+            else if (mText[mAt] == '#') {
+                while (mAt < mText.size() && mText[mAt] != '\n') ++mAt;
+            } else break;
+        }
+    }
+    std::string_view mText;
+    std::size_t mAt = 0;
+};
+
+bool parseCount(std::string_view token, std::uint64_t& value) {
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+    return ec == std::errc() && end == token.data() + token.size();
+}
+
+void precheckOff(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
+    Tokens tokens(bytes);
+    const std::string_view magic = tokens.next();
+    if (magic.size() < 3 || magic.substr(magic.size() - 3) != "OFF")
+        throw InputError(file, "not an OFF file (no OFF keyword)");
+    if (magic.find('n') != std::string_view::npos || magic.find('4') != std::string_view::npos)
+        throw InputError(file, "nOFF and 4OFF (higher-dimensional) files are not supported");
+    std::string_view first = tokens.next();
+    if (first == "BINARY") throw InputError(file, "binary OFF is not supported");
+    std::uint64_t vertices = 0, faces = 0, edges = 0;
+    if (!parseCount(first, vertices) || !parseCount(tokens.next(), faces) || !parseCount(tokens.next(), edges))
+        throw InputError(file, "OFF header: bad vertex/face/edge counts");
+    // Each vertex takes at least "0 0 0\n" (6 bytes), each face "3 0 0 0\n" (8 bytes).
+    const std::uint64_t available = bytes.size();
+    if (vertices > available / 6 || faces > available / 8 || vertices * 6 + faces * 8 > available)
+        throw InputError(file, "OFF header claims " + std::to_string(vertices) + " vertices and " +
+                                   std::to_string(faces) + " faces, more than the file's " +
+                                   std::to_string(available) + " bytes can hold");
+    if (faces > options.maxTriangles)
+        throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " faces (see --max-triangles)");
+    // Vertex records are one per line; each face record starts with its corner count, which
+    // OpenMesh uses to size a vector: check it against the vertex count and the line.
+    for (std::uint64_t v = 0; v < vertices; ++v)
+        if (tokens.line().empty() && tokens.done()) throw InputError(file, "truncated OFF: missing vertices");
+    std::uint64_t triangles = 0;
+    for (std::uint64_t f = 0; f < faces; ++f) {
+        std::string_view record = tokens.line();
+        if (record.empty() && tokens.done()) throw InputError(file, "truncated OFF: missing faces");
+        Tokens face(record);
+        std::uint64_t corners = 0;
+        if (!parseCount(face.next(), corners))
+            throw InputError(file, "OFF face " + std::to_string(f) + ": bad corner count");
+        if (corners > vertices || corners > record.size())
+            throw InputError(file, "OFF face " + std::to_string(f) + " claims " + std::to_string(corners) +
+                                       " corners, more than the file holds");
+        triangles += corners >= 3 ? corners - 2 : 0;
+        if (triangles > options.maxTriangles)
+            throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " triangles (see --max-triangles)");
+    }
+}
+
+int plyTypeSize(std::string_view type) {
+    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+    if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
+        type == "float32")
+        return 4;
+    if (type == "double" || type == "float64") return 8;
+    return 0;
+}
+
+struct PlyProperty {
+    int size = 0;       // scalar size, or list item size
+    int countSize = 0;  // 0 for a scalar
+    std::string countType;
+};
+struct PlyElement {
+    std::string name;
+    std::uint64_t count = 0;
+    std::vector<PlyProperty> properties;
+};
+
+std::uint64_t readPlyCount(const unsigned char* p, int size, bool bigEndian, std::string_view type) {
+    unsigned char b[4] = {0, 0, 0, 0};
+    std::memcpy(b, p, std::size_t(size));
+    if (bigEndian) std::reverse(b, b + size);
+    if (size == 1) return (type == "char" || type == "int8") ? std::uint64_t(std::int8_t(b[0]) < 0 ? ~0ull : b[0]) : b[0];
+    if (size == 2) {
+        std::uint16_t v;
+        std::memcpy(&v, b, 2);
+        if ((type == "short" || type == "int16") && std::int16_t(v) < 0) return ~0ull;
+        return v;
+    }
+    std::uint32_t v;
+    std::memcpy(&v, b, 4);
+    if ((type == "int" || type == "int32") && std::int32_t(v) < 0) return ~0ull;
+    return v;
+}
+
+void precheckPly(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
+    const std::size_t headerEnd = bytes.find("end_header");
+    if (bytes.substr(0, 3) != "ply" || headerEnd == std::string_view::npos)
+        throw InputError(file, "not a PLY file (no 'ply' magic or no end_header)");
+    std::size_t dataStart = bytes.find('\n', headerEnd);
+    if (dataStart == std::string_view::npos) throw InputError(file, "truncated PLY: nothing after end_header");
+    ++dataStart;
+    std::string format;
+    std::vector<PlyElement> elements;
+    std::string_view header = bytes.substr(0, headerEnd);
+    for (std::size_t at = 0; at < header.size();) {
+        std::size_t end = header.find('\n', at);
+        if (end == std::string_view::npos) end = header.size();
+        Tokens line(header.substr(at, end - at));
+        at = end + 1;
+        const std::string_view keyword = line.next();
+        if (keyword == "format") {
+            format = std::string(line.next());
+        } else if (keyword == "element") {
+            PlyElement element;
+            element.name = std::string(line.next());
+            if (!parseCount(line.next(), element.count)) throw InputError(file, "PLY header: bad element count");
+            elements.push_back(element);
+        } else if (keyword == "property") {
+            if (elements.empty()) throw InputError(file, "PLY header: property before any element");
+            PlyProperty property;
+            const std::string_view type = line.next();
+            if (type == "list") {
+                property.countType = std::string(line.next());
+                property.countSize = plyTypeSize(property.countType);
+                property.size = plyTypeSize(line.next());
+                if (property.countSize == 0 || property.countSize == 8 || property.size == 0 ||
+                    property.countType == "float" || property.countType == "float32")
+                    throw InputError(file, "PLY header: bad list property types");
+            } else {
+                property.size = plyTypeSize(type);
+                if (property.size == 0) throw InputError(file, "PLY header: unknown property type");
+            }
+            elements.back().properties.push_back(property);
+        }
+    }
+    const bool ascii = format == "ascii";
+    const bool little = format == "binary_little_endian";
+    const bool big = format == "binary_big_endian";
+    if (!ascii && !little && !big) throw InputError(file, "PLY header: unknown format '" + format + "'");
+
+    // Every element record needs at least one byte per property (ascii: a digit and a space).
+    const std::uint64_t available = bytes.size() - dataStart;
+    std::uint64_t minimum = 0;
+    for (const auto& element : elements) {
+        std::uint64_t record = 0;
+        for (const auto& p : element.properties) record += ascii ? 2 : std::uint64_t(p.countSize ? p.countSize : p.size);
+        if (record == 0) continue;
+        if (element.count > available / record || minimum + element.count * record > available)
+            throw InputError(file, "PLY header claims " + std::to_string(element.count) + " '" + element.name +
+                                       "' elements, more than the file's bytes can hold");
+        minimum += element.count * record;
+        if (element.name == "face" && element.count > options.maxTriangles)
+            throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " faces (see --max-triangles)");
+    }
+
+    // Walk the records: every list's count must fit in what remains.
+    if (ascii) {
+        Tokens tokens(bytes.substr(dataStart));
+        for (const auto& element : elements)
+            for (std::uint64_t r = 0; r < element.count; ++r) {
+                const std::string_view record = tokens.line();
+                if (record.empty() && tokens.done())
+                    throw InputError(file, "truncated PLY: missing '" + element.name + "' records");
+                Tokens fields(record);
+                for (const auto& p : element.properties) {
+                    const std::string_view token = fields.next();
+                    if (p.countSize == 0) continue;
+                    std::uint64_t count = 0;
+                    if (!parseCount(token, count) || count > record.size())
+                        throw InputError(file, "PLY '" + element.name + "' record " + std::to_string(r) +
+                                                   ": list count larger than its line");
+                    for (std::uint64_t i = 0; i < count; ++i) fields.next();
+                }
+            }
+        return;
+    }
+    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data()) + dataStart;
+    std::uint64_t at = 0;
+    for (const auto& element : elements)
+        for (std::uint64_t r = 0; r < element.count; ++r)
+            for (const auto& p : element.properties) {
+                if (p.countSize == 0) {
+                    if (available - at < std::uint64_t(p.size)) throw InputError(file, "truncated PLY data");
+                    at += std::uint64_t(p.size);
+                    continue;
+                }
+                if (available - at < std::uint64_t(p.countSize)) throw InputError(file, "truncated PLY data");
+                const std::uint64_t count = readPlyCount(data + at, p.countSize, big, p.countType);
+                at += std::uint64_t(p.countSize);
+                if (count > (available - at) / std::uint64_t(p.size))
+                    throw InputError(file, "PLY '" + element.name + "' record " + std::to_string(r) +
+                                               ": list of " + std::to_string(count) + " items runs past the end");
+                at += count * std::uint64_t(p.size);
+            }
+}
+
+void precheckStl(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
+    if (bytes.size() < 15) throw InputError(file, "truncated STL");
+    // Binary STL: an 80-byte header, a 32-bit triangle count, 50 bytes per triangle. OpenMesh
+    // decides binary vs. ASCII by that size formula too.
+    if (bytes.size() >= 84) {
+        std::uint32_t count;
+        std::memcpy(&count, bytes.data() + 80, 4);
+        if (84 + std::uint64_t(count) * 50 == bytes.size()) {
+            if (count > options.maxTriangles)
+                throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " triangles (see --max-triangles)");
+            return;
+        }
+    }
+    if (bytes.substr(0, 5) != "solid" && bytes.find("facet") == std::string_view::npos)
+        throw InputError(file, "neither an ASCII STL (no 'solid') nor a binary STL (size does not match its triangle count)");
+}
+
+}  // namespace
+
+void precheckOpenMeshInput(std::string_view bytes, const std::string& format, const fs::path& file,
+                           const IngestOptions& options) {
+    if (bytes.empty()) throw InputError(file, "empty file");
+    if (format == "off") precheckOff(bytes, file, options);
+    else if (format == "ply") precheckPly(bytes, file, options);
+    else if (format == "stl") precheckStl(bytes, file, options);
+    else throw InputError(file, "unknown format '" + format + "'");
+}
+
+RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format, const fs::path& file,
+                         const IngestOptions& options) {
+    precheckOpenMeshInput(bytes, format, file, options);
+
+    // OpenMesh reports through omerr()/omlog(); libraries never print.
+    omerr().disable();
+    omlog().disable();
+    omout().disable();
+
+    PolyMesh mesh;
+    mesh.request_vertex_normals();
+    OpenMesh::IO::Options readOptions = OpenMesh::IO::Options::VertexNormal;
+    if (format == "stl" && !(bytes.substr(0, 5) == "solid" && bytes.find("facet") != std::string_view::npos &&
+                             bytes.find("endsolid") != std::string_view::npos))
+        readOptions += OpenMesh::IO::Options::Binary;
+    std::istringstream stream{std::string(bytes)};
+    bool ok = false;
+    try {
+        ok = OpenMesh::IO::read_mesh(mesh, stream, "." + format, readOptions);
+    } catch (const std::bad_alloc&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(file, std::string("OpenMesh could not read it: ") + e.what());
+    }
+    if (!ok) throw InputError(file, "OpenMesh could not read it as " + format);
+
+    RawMesh out;
+    out.format = format;
+    out.positions.reserve(mesh.n_vertices());
+    for (const auto vh : mesh.vertices()) {
+        const auto& p = mesh.point(vh);
+        out.positions.emplace_back(p[0], p[1], p[2]);
+    }
+    if (readOptions.check(OpenMesh::IO::Options::VertexNormal)) {
+        out.normals.reserve(mesh.n_vertices());
+        for (const auto vh : mesh.vertices()) {
+            const auto& n = mesh.normal(vh);
+            out.normals.emplace_back(n[0], n[1], n[2]);
+        }
+    }
+    std::vector<std::uint32_t> corners;
+    for (const auto fh : mesh.faces()) {
+        corners.clear();
+        for (const auto vh : mesh.fv_ccw_range(fh)) corners.push_back(std::uint32_t(vh.idx()));
+        if (corners.size() < 3) continue;
+        // fv_ccw_range runs in the face's own order (counter-clockwise around its normal).
+        const std::size_t added = corners.size() - 2;
+        if (out.triangles.size() + added > options.maxTriangles)
+            throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " triangles (see --max-triangles)");
+        for (std::size_t i = 1; i + 1 < corners.size(); ++i)
+            out.triangles.push_back({corners[0], corners[i], corners[i + 1]});
+        out.polygonTriangles.push_back(std::uint32_t(added));
+    }
+    if (out.triangles.empty()) throw InputError(file, "no faces");
+    return out;
+}
+
+}  // namespace vtex::ingest::detail
