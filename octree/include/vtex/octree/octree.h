@@ -1,0 +1,144 @@
+/// @file
+/// @brief The filtered, compressed octree of a texel (what a .vto file holds), and its builder.
+///
+/// Neyret 1994 §3 (multiscale model) and §3.3 (filtering); DESIGN.md, "Octree: filtering and
+/// compression". Level ℓ has 2^ℓ voxels per side; level 0 is the whole texel.
+///
+/// Compression: a stored node with no children (childMask 0) is a *leaf* and stands for all its
+/// descendants: every finest voxel below it is within the tolerance ε of it (density relative:
+/// |ρ − ρ_leaf| ≤ ε ρ_leaf; normalised S and albedo absolute, entrywise, for non-empty voxels).
+/// An internal node's missing children are empty. An empty region is therefore represented
+/// once, by the cleared bit of its coarsest non-empty ancestor (or by an empty root).
+#pragma once
+
+#include <vtex/core/progress.h>
+#include <vtex/octree/filtering.h>
+#include <vtex/octree/volume.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vtex::octree {
+
+struct OctreeNode {
+    VoxelData data;
+    std::uint8_t childMask = 0;    ///< bit c set: child c (see mortonEncode) is stored
+    std::uint32_t firstChild = 0;  ///< index of the first stored child in the next level
+
+    bool isLeaf() const { return childMask == 0; }
+    friend bool operator==(const OctreeNode&, const OctreeNode&) = default;
+};
+
+/// Statistics of one level.
+struct LevelStats {
+    std::uint64_t storedNodes = 0;    ///< nodes stored at this level
+    std::uint64_t occupiedNodes = 0;  ///< non-empty voxels at this level before compression
+    /// Mean density over the whole level (empty voxels count 0); filtering conserves it, so it
+    /// is the same at every level up to rounding.
+    double meanDensity = 0;
+    /// Mean density over the non-empty voxels of the level.
+    double meanOccupiedDensity = 0;
+    /// Filter error (filterError()) of the level's filtered nodes: mean and max over a
+    /// deterministic sample of `filterErrorSamples` nodes (0 for the finest level).
+    double filterErrorMean = 0;
+    double filterErrorMax = 0;
+    std::uint64_t filterErrorSamples = 0;
+    friend bool operator==(const LevelStats&, const LevelStats&) = default;
+};
+
+struct OctreeInfo {
+    VolumeInfo source;  ///< what the .vtl said (resolution, mapping, fit error …)
+    FilterRule rule = FilterRule::Sggx;
+    float tolerance = 0;
+    friend bool operator==(const OctreeInfo&, const OctreeInfo&) = default;
+};
+
+class Octree {
+public:
+    OctreeInfo info;
+    /// levels[ℓ]: the stored nodes of level ℓ in Morton order; levels[0] holds the root (an
+    /// empty root when the volume is empty). levels.size() = L + 1.
+    std::vector<std::vector<OctreeNode>> levels;
+    std::vector<LevelStats> stats;  ///< one per level
+
+    friend bool operator==(const Octree&, const Octree&) = default;
+
+    std::uint32_t levelCount() const { return std::uint32_t(levels.size()); }
+    std::uint32_t resolution() const { return std::uint32_t(1) << info.source.levels; }
+    std::uint64_t storedNodes() const;
+    /// 1 − stored nodes / N³.
+    double compression() const;
+
+    /// The node that stands for voxel (x, y, z) of `level` (indices at that level): the stored
+    /// node at that level or the leaf above it. Empty optional for empty space.
+    struct Found {
+        const OctreeNode* node;
+        std::uint32_t level;  ///< where it is stored (≤ the level asked for)
+    };
+    std::optional<Found> find(std::uint32_t level, std::uint32_t x, std::uint32_t y,
+                              std::uint32_t z) const;
+
+    /// Every non-empty voxel of `level` that the compressed tree stands for, each as a block at
+    /// `level` (leaves above are replicated): for tests and tools, O(8^level) at worst.
+    std::vector<VolumeBlock> expandLevel(std::uint32_t level) const;
+};
+
+struct BuildOptions {
+    FilterRule rule = FilterRule::Sggx;
+    double tolerance = 0;  ///< ε ≥ 0, see the file comment; 0 keeps only exactly constant regions
+    /// Filtered nodes per level on which the filter error is measured (a deterministic,
+    /// hash-selected sample); 0 measures all of them.
+    std::uint64_t filterErrorSamples = 4096;
+};
+
+/// Builds every level from the sampled finest level, keeping the uncompressed pyramid so that
+/// a region can be re-sampled and only its ancestors re-filtered (the paper's partial
+/// recompute). Memory O(occupied voxels).
+class OctreeBuilder {
+public:
+    OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress);
+    ~OctreeBuilder();
+    OctreeBuilder(OctreeBuilder&&) noexcept;
+    OctreeBuilder& operator=(OctreeBuilder&&) noexcept;
+
+    /// Replaces everything inside `region` (finest voxel indices) by `blocks` (each inside the
+    /// region; surface voxels and solid blocks as the sampler returns them for that region),
+    /// then re-filters only the nodes above the region. Throws std::invalid_argument if a block
+    /// lies outside the region.
+    void updateRegion(const VoxelBox& region, std::vector<VolumeBlock> blocks, Progress& progress);
+
+    /// The compressed octree of the current state.
+    Octree compress(Progress& progress) const;
+
+    /// The current finest level (with the region updates applied).
+    const SparseVolume& finest() const;
+    /// Nodes filtered so far (full build plus updates): lets tests check that an update
+    /// re-filters only the ancestors of its region.
+    std::uint64_t filteredNodeCount() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> mImpl;
+};
+
+/// OctreeBuilder(volume).compress() in one call.
+Octree buildOctree(const SparseVolume& volume, const BuildOptions& options, Progress& progress);
+
+/// The filter rule's name on the command line and in files: "neyret" or "sggx".
+std::string_view filterRuleName(FilterRule rule);
+std::optional<FilterRule> parseFilterRule(std::string_view name);
+
+/// .vto file format version written by this program (docs/formats.md).
+inline constexpr std::uint32_t kVtoVersion = 1;
+std::string serializeVto(const Octree& octree);
+/// Parses and validates .vto bytes. Throws vtex::InputError naming the failing section.
+Octree parseVto(std::string_view bytes, const std::filesystem::path& file);
+void writeVto(const Octree& octree, const std::filesystem::path& file);
+Octree readVto(const std::filesystem::path& file);
+
+}  // namespace vtex::octree

@@ -1,0 +1,162 @@
+// The sampled finest level and the .vtl file format (docs/formats.md).
+#include "container.h"
+
+#include <vtex/core/atomic_file.h>
+#include <vtex/core/error.h>
+#include <vtex/octree/volume.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vtex::octree {
+namespace {
+
+constexpr std::string_view kVtlMagic{"VTEX.VTL", 8};
+constexpr std::size_t kBlockRecordSize = 8 + 1 + 4 * 10;
+
+bool allFinite(const VoxelData& d) {
+    if (!std::isfinite(d.density)) return false;
+    for (float v : d.s)
+        if (!std::isfinite(v)) return false;
+    for (float v : d.albedo)
+        if (!std::isfinite(v)) return false;
+    return true;
+}
+
+}  // namespace
+
+namespace detail {
+
+void writeVoxelData(ByteWriter& w, const VoxelData& d) {
+    w.f32(d.density);
+    for (float v : d.s) w.f32(v);
+    for (float v : d.albedo) w.f32(v);
+}
+
+VoxelData readVoxelData(ByteReader& r) {
+    VoxelData d;
+    d.density = r.f32();
+    for (float& v : d.s) v = r.f32();
+    for (float& v : d.albedo) v = r.f32();
+    return d;
+}
+
+// Validates one stored voxel: finite, non-negative density. Returns a problem or empty.
+std::string checkVoxelData(const VoxelData& d, bool allowEmpty) {
+    if (!allFinite(d)) return "non-finite value";
+    if (d.density < 0) return "negative density";
+    if (!allowEmpty && d.density == 0) return "empty voxel stored";
+    return {};
+}
+
+void writeVolumeInfo(ByteWriter& w, const VolumeInfo& info) {
+    w.u32(info.levels);
+    w.u8(info.cyclic ? 1 : 0);
+    w.f32(info.solidDensity);
+    w.f64(info.scale);
+    for (double v : info.offset) w.f64(v);
+    w.u64(info.sourceTriangles);
+    w.f64(info.sourceArea);
+    w.u64(info.fitError.samples);
+    w.f64(info.fitError.mean);
+    w.f64(info.fitError.max);
+}
+
+VolumeInfo readVolumeInfo(ByteReader& r, const std::filesystem::path& file, std::string_view tag) {
+    VolumeInfo info;
+    info.levels = r.u32();
+    const std::uint8_t cyclic = r.u8();
+    info.cyclic = cyclic != 0;
+    info.solidDensity = r.f32();
+    info.scale = r.f64();
+    for (double& v : info.offset) v = r.f64();
+    info.sourceTriangles = r.u64();
+    info.sourceArea = r.f64();
+    info.fitError.samples = r.u64();
+    info.fitError.mean = r.f64();
+    info.fitError.max = r.f64();
+    const std::string where = sectionLocation(tag);
+    if (!r.ok()) throw InputError(file, "too short", where);
+    if (info.levels > std::uint32_t(kMaxLevel))
+        throw InputError(file, "resolution 2^" + std::to_string(info.levels) + " is beyond 2^20", where);
+    if (cyclic > 1) throw InputError(file, "invalid cyclic flag", where);
+    const bool finite = std::isfinite(info.solidDensity) && info.solidDensity >= 0 &&
+                        std::isfinite(info.scale) && info.scale > 0 && std::isfinite(info.offset[0]) &&
+                        std::isfinite(info.offset[1]) && std::isfinite(info.offset[2]) &&
+                        std::isfinite(info.sourceArea) && info.sourceArea >= 0 &&
+                        std::isfinite(info.fitError.mean) && std::isfinite(info.fitError.max);
+    if (!finite) throw InputError(file, "invalid number in the header", where);
+    return info;
+}
+
+}  // namespace detail
+
+void SparseVolume::sortBlocks() {
+    std::sort(blocks.begin(), blocks.end(), [this](const VolumeBlock& a, const VolumeBlock& b) {
+        return finestKey(a) < finestKey(b);
+    });
+}
+
+double SparseVolume::totalMass() const {
+    double mass = 0;
+    for (const auto& b : blocks) mass += double(b.data.density) * std::ldexp(1.0, -3 * int(b.level));
+    return mass;
+}
+
+std::string serializeVtl(const SparseVolume& volume) {
+    using namespace detail;
+    ByteWriter head;
+    writeVolumeInfo(head, volume.info);
+    ByteWriter voxels;
+    voxels.reserve(8 + kBlockRecordSize * volume.blocks.size());
+    voxels.u64(volume.blocks.size());
+    for (const auto& b : volume.blocks) {
+        voxels.u64(b.key);
+        voxels.u8(b.level);
+        writeVoxelData(voxels, b.data);
+    }
+    return writeContainer(kVtlMagic, kVtlVersion, {{"HEAD", head.str()}, {"VOXL", std::move(voxels.str())}});
+}
+
+SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file) {
+    using namespace detail;
+    const auto sections = readContainer(bytes, kVtlMagic, kVtlVersion, file);
+    SparseVolume volume;
+    ByteReader head(requireSection(sections, "HEAD", file));
+    volume.info = readVolumeInfo(head, file, "HEAD");
+    if (head.remaining() != 0) throw InputError(file, "unexpected trailing bytes", sectionLocation("HEAD"));
+
+    const std::string where = sectionLocation("VOXL");
+    const std::string_view payload = requireSection(sections, "VOXL", file);
+    ByteReader reader(payload);
+    const std::uint64_t count = reader.u64();
+    if (!reader.ok() || count > reader.remaining() / kBlockRecordSize ||
+        count * kBlockRecordSize != reader.remaining())
+        throw InputError(file, "size does not match its block count " + std::to_string(count), where);
+    volume.blocks.resize(count);
+    const std::uint32_t L = volume.info.levels;
+    std::uint64_t nextFree = 0;  // first finest key not covered by the blocks so far
+    for (std::uint64_t i = 0; i < count; ++i) {
+        VolumeBlock& b = volume.blocks[i];
+        b.key = reader.u64();
+        b.level = reader.u8();
+        b.data = readVoxelData(reader);
+        const std::string blockWhere = where + ", block " + std::to_string(i);
+        if (b.level > L) throw InputError(file, "level deeper than the resolution", blockWhere);
+        if (b.key >= (std::uint64_t(1) << (3 * b.level))) throw InputError(file, "key out of range", blockWhere);
+        if (const auto problem = checkVoxelData(b.data, false); !problem.empty())
+            throw InputError(file, problem, blockWhere);
+        const std::uint64_t first = volume.finestKey(b);
+        if (first < nextFree) throw InputError(file, "blocks out of order or overlapping", blockWhere);
+        nextFree = first + (std::uint64_t(1) << (3 * (L - b.level)));
+    }
+    return volume;
+}
+
+void writeVtl(const SparseVolume& volume, const std::filesystem::path& file) {
+    writeFileAtomically(file, serializeVtl(volume));
+}
+
+SparseVolume readVtl(const std::filesystem::path& file) { return parseVtl(readFileBytes(file), file); }
+
+}  // namespace vtex::octree
