@@ -85,10 +85,18 @@ Ellipsoid::Ellipsoid(const Mat3& basis, const Vec3& semiAxes) {
         mSemiAxes[k] = floored[order[k]];
     }
     const Vec3& a = mSemiAxes;
-    mSigmaSquared = Vec3(kPi * a[1] * a[2], kPi * a[0] * a[2], kPi * a[0] * a[1]).cwiseAbs2();
     const double volumeProduct = a.prod();
     mDetM = volumeProduct * volumeProduct;
     mExactMeanArea = a[2] * a[2] * unitSurfaceArea(a[0] / a[2], a[1] / a[2]) / 4;
+    cacheForms();
+}
+
+void Ellipsoid::cacheForms() {
+    const auto unique = [](const Mat3& m) {
+        return std::array<double, 6>{m(0, 0), m(1, 1), m(2, 2), m(0, 1), m(0, 2), m(1, 2)};
+    };
+    mS = unique(S());
+    mM = unique(M());
 }
 
 Ellipsoid Ellipsoid::fromAxes(const Mat3& basis, const Vec3& semiAxes) {
@@ -168,7 +176,12 @@ Mat3 Ellipsoid::Q() const {
     return mBasis * mSemiAxes.cwiseAbs2().cwiseInverse().asDiagonal() * mBasis.transpose();
 }
 
-Mat3 Ellipsoid::S() const { return mBasis * mSigmaSquared.asDiagonal() * mBasis.transpose(); }
+Mat3 Ellipsoid::S() const {
+    const Vec3& a = mSemiAxes;
+    const Vec3 sigmaSquared =
+        Vec3(kPi * a[1] * a[2], kPi * a[0] * a[2], kPi * a[0] * a[1]).cwiseAbs2();
+    return mBasis * sigmaSquared.asDiagonal() * mBasis.transpose();
+}
 
 double Ellipsoid::surfaceArea() const { return 4 * mExactMeanArea; }
 
@@ -186,9 +199,10 @@ Ellipsoid Ellipsoid::scaled(double factor) const {
     Ellipsoid copy = *this;
     const double areaFactor = factor * factor;
     copy.mSemiAxes *= factor;
-    copy.mSigmaSquared *= areaFactor * areaFactor;
     copy.mDetM *= areaFactor * areaFactor * areaFactor;
     copy.mExactMeanArea *= areaFactor;
+    for (double& s : copy.mS) s *= areaFactor * areaFactor;
+    for (double& m : copy.mM) m *= areaFactor;
     return copy;
 }
 
