@@ -1,0 +1,133 @@
+// `vtex inspect leaves.vtl [--json]`: what a sampled volume holds.
+#include "cli.h"
+
+#include <vtex/core/error.h>
+#include <vtex/octree/volume.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+namespace vtex::cli {
+namespace {
+
+std::string number(double v) {
+    if (!std::isfinite(v)) return "null";
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.9g", v);
+    return buffer;
+}
+
+std::string quoted(const std::string& s) {
+    std::string out = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        if (static_cast<unsigned char>(c) < 0x20) {
+            char esc[8];
+            std::snprintf(esc, sizeof esc, "\\u%04x", c);
+            out += esc;
+        } else {
+            out += c;
+        }
+    }
+    return out + "\"";
+}
+
+std::string checksumsJson(const octree::FileCheck& check) {
+    std::string out = "{\"valid\": " + std::string(check.problem.empty() ? "true" : "false") +
+                      ", \"version\": " + std::to_string(check.version) + ", \"problem\": " +
+                      (check.problem.empty() ? "null" : quoted(check.problem)) + ", \"sections\": [";
+    for (std::size_t i = 0; i < check.sections.size(); ++i) {
+        const auto& s = check.sections[i];
+        out += (i ? ", " : "") + std::string("{\"tag\": ") + quoted(s.tag) + ", \"bytes\": " + std::to_string(s.size) +
+               ", \"checksum\": " + (s.checksumOk ? "\"ok\"" : "\"mismatch\"") + "}";
+    }
+    return out + "]}";
+}
+
+void printChecksums(const octree::FileCheck& check, std::ostream& out) {
+    out << "checksums:";
+    for (const auto& s : check.sections) out << "  " << s.tag << " (" << s.size << " B) " << (s.checksumOk ? "ok" : "MISMATCH");
+    out << (check.problem.empty() ? "" : "  -- " + check.problem) << '\n';
+}
+
+void inspectVtl(const std::filesystem::path& file, bool json, std::ostream& out) {
+    const std::string bytes = octree::readFileBytes(file);
+    const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTL", 8), octree::kVtlVersion);
+    if (!check.problem.empty()) {
+        if (json) out << "{\"file\": " << quoted(file.string()) << ", \"checksums\": " << checksumsJson(check) << "}\n";
+        else printChecksums(check, out);
+    }
+    const octree::SparseVolume volume = octree::parseVtl(bytes, file);  // throws on any problem
+    const auto& info = volume.info;
+    const std::uint32_t L = info.levels;
+    std::uint64_t surface = 0, solidBlocks = 0;
+    double solidVoxels = 0, surfaceArea = 0, mass = 0;
+    std::array<std::uint32_t, 3> lo{~0u, ~0u, ~0u}, hi{0, 0, 0};
+    for (const auto& b : volume.blocks) {
+        const double voxels = std::ldexp(1.0, 3 * int(L - b.level));
+        if (b.level == L) {
+            ++surface;
+            surfaceArea += double(b.data.density) * 2.0 / std::ldexp(1.0, 3 * int(L));
+        } else {
+            ++solidBlocks;
+            solidVoxels += voxels;
+        }
+        mass += double(b.data.density) * voxels;
+        const auto c = octree::mortonDecode(b.key);
+        const std::uint32_t s = L - b.level;
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], c[a] << s);
+            hi[a] = std::max(hi[a], ((c[a] + 1) << s) - 1);
+        }
+    }
+    const double n3 = std::ldexp(1.0, 3 * int(L));
+    if (json) {
+        out << "{\"file\": " << quoted(file.string()) << ", \"kind\": \"vtl\", \"version\": " << check.version
+            << ", \"resolution\": " << info.resolution() << ", \"levels\": " << L + 1
+            << ", \"cyclic\": " << (info.cyclic ? "true" : "false") << ", \"scale\": " << number(info.scale)
+            << ", \"offset\": [" << number(info.offset[0]) << ", " << number(info.offset[1]) << ", "
+            << number(info.offset[2]) << "], \"source_triangles\": " << info.sourceTriangles
+            << ", \"source_area\": " << number(info.sourceArea) << ", \"surface_voxels\": " << surface
+            << ", \"sampled_area\": " << number(surfaceArea) << ", \"solid_blocks\": " << solidBlocks
+            << ", \"solid_voxels\": " << number(solidVoxels) << ", \"solid_density\": " << number(info.solidDensity)
+            << ", \"mean_density\": " << number(mass / n3) << ", \"occupied_bounds\": ";
+        if (volume.blocks.empty()) out << "null";
+        else
+            out << "[[" << lo[0] << ", " << lo[1] << ", " << lo[2] << "], [" << hi[0] << ", " << hi[1] << ", " << hi[2] << "]]";
+        out << ", \"fit_error\": {\"mean\": " << number(info.fitError.mean) << ", \"max\": " << number(info.fitError.max)
+            << ", \"samples\": " << info.fitError.samples << "}, \"checksums\": " << checksumsJson(check) << "}\n";
+        return;
+    }
+    char line[512];
+    out << file.string() << ": sampled volume (.vtl version " << check.version << ")\n";
+    std::snprintf(line, sizeof line, "resolution: %u^3 (%u levels)%s\n", info.resolution(), L + 1,
+                  info.cyclic ? ", cyclic in x and y" : "");
+    out << line;
+    std::snprintf(line, sizeof line, "source: %llu triangles, area %.6g (reference units), mapped by x*%.6g + (%.6g, %.6g, %.6g)\n",
+                  (unsigned long long)info.sourceTriangles, info.sourceArea, info.scale, info.offset[0],
+                  info.offset[1], info.offset[2]);
+    out << line;
+    std::snprintf(line, sizeof line, "surface voxels: %llu (%.4f%% of N^3), sampled area %.6g\n",
+                  (unsigned long long)surface, 100.0 * double(surface) / n3, surfaceArea);
+    out << line;
+    std::snprintf(line, sizeof line, "solid: %llu blocks covering %.0f voxels, density %.6g\n",
+                  (unsigned long long)solidBlocks, solidVoxels, double(info.solidDensity));
+    out << line;
+    std::snprintf(line, sizeof line, "mean density: %.6g\n", mass / n3);
+    out << line;
+    if (!volume.blocks.empty()) {
+        std::snprintf(line, sizeof line, "occupied voxels: [%u %u %u] .. [%u %u %u]\n", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+        out << line;
+    }
+    std::snprintf(line, sizeof line, "fit error: mean %.4g, max %.4g over %llu voxels\n", info.fitError.mean,
+                  info.fitError.max, (unsigned long long)info.fitError.samples);
+    out << line;
+    printChecksums(check, out);
+}
+
+const bool registered = registerInspector(".vtl", inspectVtl);
+
+}  // namespace
+}  // namespace vtex::cli

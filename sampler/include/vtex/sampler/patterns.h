@@ -1,0 +1,50 @@
+/// @file
+/// @brief Procedural source meshes: the paper's scripts of primitives, as ordinary meshes.
+///
+/// F. Neyret 1994: grass (Fig. 7: blades of decreasing V section in a cyclic volume), bush
+/// (Figs. 5–6: up to 2000 leaves), fur (Figs. 8 and 10: thin cylinders, cyclic), brushed
+/// aluminium (Fig. 1: concentric cylinders turning into spheres, or radial cylinders) and
+/// building blocks (Fig. 11: elements sometimes thinner than a voxel). Every pattern lies in the
+/// unit reference cube, z up, and is deterministic for a seed (its own generator, not the
+/// platform's distributions). Cyclic patterns are tileable: whatever crosses the tile's x or y
+/// border is cut there and the cut-off part is moved to the opposite side, so the mesh stays in
+/// [0,1]² × [0,1] and copies placed side by side join without seams.
+#pragma once
+
+#include <vtex/ingest/mesh.h>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace vtex::sampler {
+
+struct PatternOptions {
+    std::uint64_t seed = 1;
+    /// Number of elements: blades (grass, default 16), leaves (bush, default 2000), hairs (fur,
+    /// default 300), rings or spokes (brushed, default 9 / 24), elements (blocks, default 24).
+    /// 0 = the default.
+    int count = 0;
+    /// Angular fluctuation of the elements' directions, radians (standard deviation); < 0 = the
+    /// pattern's default (grass 0.25, fur 0.15).
+    double fluctuation = -1;
+    /// Mean lean of blades and hairs from the vertical toward +x, degrees.
+    double leanDegrees = 0;
+    /// brushed: "concentric" (default) or "radial".
+    std::string variant;
+};
+
+/// grass, bush, fur, brushed, blocks.
+const std::vector<std::string>& patternNames();
+/// Whether a pattern is tileable in x and y (grass and fur): sample it with `cyclic`.
+bool isCyclicPattern(std::string_view name);
+
+/// Generates a pattern. Throws std::invalid_argument for an unknown name or a bad option.
+ingest::TriangleMesh makePattern(std::string_view name, const PatternOptions& options);
+
+/// Cuts `mesh` along the planes x = k and y = k (integers) and moves every piece into the unit
+/// tile [0,1)², interpolating normals and UVs; the area is unchanged. Used by cyclic patterns.
+ingest::TriangleMesh wrapIntoUnitTile(const ingest::TriangleMesh& mesh);
+
+}  // namespace vtex::sampler

@@ -1,0 +1,486 @@
+// Mesh → finest level: exact clipped areas, fitted ellipsoids, albedo, solid interior.
+// F. Neyret 1994 §3 and §3.3; DESIGN.md, "Sampling (mesh → finest level)".
+//
+// Three parallel phases, deterministic whatever the thread count:
+//  1. clip: triangles in fixed chunks, each piece of a triangle in a voxel becomes a record
+//     (voxel key, triangle, area, colour);
+//  2. scatter: records go to 4096 buckets by the top bits of their Morton key, chunk by chunk,
+//     so each bucket is a contiguous key range and its records keep triangle order;
+//  3. reduce: each bucket sorts its records by (voxel, triangle) and sums each voxel in that
+//     order, so a voxel's value never depends on scheduling or on the sampled region.
+// Then, for closed meshes, the interior is classified top-down over the octree: a node with no
+// surface voxel below it is tested once (its centre, CGAL) and becomes one solid block.
+#include "inside_test.h"
+
+#include <vtex/core/error.h>
+#include <vtex/octree/filtering.h>
+#include <vtex/sampler/clip.h>
+#include <vtex/sampler/sampler.h>
+
+#include <Eigen/Geometry>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <numeric>
+#include <unordered_map>
+
+namespace vtex::sampler {
+namespace {
+
+using octree::VolumeBlock;
+using octree::VoxelBox;
+using Vec3 = Eigen::Vector3d;
+
+struct Record {
+    std::uint64_t key;
+    std::uint32_t tri;
+    float area;                // voxel units²
+    std::array<float, 3> rgb;  // mean linear colour over the piece
+};
+
+std::uint64_t mix64(std::uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+
+const std::array<float, 256>& srgbTable() {
+    static const std::array<float, 256> table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) {
+            const double c = i / 255.0;
+            t[std::size_t(i)] = float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+        }
+        return t;
+    }();
+    return table;
+}
+
+// Bilinear lookup of a base-colour texture, glTF's default REPEAT wrapping, decoded to linear
+// before filtering (averaging sRGB values would darken edges).
+Eigen::Vector3f sampleTexture(const ingest::Image& image, float u, float v) {
+    const auto& lut = srgbTable();
+    const float x = u * float(image.width) - 0.5f, y = v * float(image.height) - 0.5f;
+    const float fx = std::floor(x), fy = std::floor(y);
+    const float tx = x - fx, ty = y - fy;
+    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+            if (!std::isfinite(fx) || !std::isfinite(fy)) return Eigen::Vector3f::Ones();
+            const int px = wrap(long(fx) + dx, image.width), py = wrap(long(fy) + dy, image.height);
+            const std::uint8_t* p = &image.rgba[(std::size_t(py) * std::size_t(image.width) + std::size_t(px)) * 4];
+            const float w = (dx ? tx : 1 - tx) * (dy ? ty : 1 - ty);
+            sum += w * Eigen::Vector3f(lut[p[0]], lut[p[1]], lut[p[2]]);
+        }
+    return sum;
+}
+
+// Everything the clip phase needs to know about one triangle.
+struct TriangleColour {
+    Eigen::Vector3f factor{1, 1, 1};
+    const ingest::Image* texture = nullptr;
+};
+
+class MeshView {
+public:
+    MeshView(const ingest::TriangleMesh& mesh, double scale, const std::array<double, 3>& offset, double n)
+        : mMesh(mesh) {
+        mPositions.resize(mesh.positions.size());
+        for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+            for (int a = 0; a < 3; ++a)
+                mPositions[i][a] = (double(mesh.positions[i][a]) * scale + offset[std::size_t(a)]) * n;
+        mHasUv = mesh.uvs.size() == mesh.positions.size();
+    }
+
+    const std::vector<Vec3>& positions() const { return mPositions; }
+    Vec3 vertex(std::size_t t, int k) const { return mPositions[mMesh.triangles[t][std::size_t(k)]]; }
+
+    TriangleColour colour(std::size_t t) const {
+        TriangleColour c;
+        const std::size_t m = mMesh.triangleMaterials.empty() ? 0 : mMesh.triangleMaterials[t];
+        if (m < mMesh.materials.size()) {
+            const auto& material = mMesh.materials[m];
+            c.factor = material.baseColorFactor.head<3>();
+            const int tex = material.baseColorTexture;
+            if (mHasUv && tex >= 0 && std::size_t(tex) < mMesh.textures.size()) {
+                const auto& image = mMesh.textures[std::size_t(tex)];
+                if (image.width > 0 && image.height > 0 &&
+                    image.rgba.size() == std::size_t(image.width) * std::size_t(image.height) * 4)
+                    c.texture = &image;
+            }
+        }
+        return c;
+    }
+
+    // Mean linear colour over a piece of triangle t: the texture sampled at the centroid of each
+    // fan triangle of the piece, weighted by its area.
+    Eigen::Vector3f pieceColour(std::size_t t, const TriangleColour& c, const ClipPolygon& piece) const {
+        if (!c.texture) return c.factor;
+        const Vec3 a = vertex(t, 0), e0 = vertex(t, 1) - a, e1 = vertex(t, 2) - a;
+        const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1);
+        const double denom = d00 * d11 - d01 * d01;
+        const auto& tri = mMesh.triangles[t];
+        const Eigen::Vector2f uv0 = mMesh.uvs[tri[0]], uv1 = mMesh.uvs[tri[1]], uv2 = mMesh.uvs[tri[2]];
+        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+        double total = 0;
+        for (int i = 1; i + 1 < piece.count; ++i) {
+            const Vec3& p0 = piece.v[0];
+            const Vec3& p1 = piece.v[std::size_t(i)];
+            const Vec3& p2 = piece.v[std::size_t(i + 1)];
+            const double w = 0.5 * (p1 - p0).cross(p2 - p0).norm();
+            const Vec3 d = (p0 + p1 + p2) / 3.0 - a;
+            const double d20 = d.dot(e0), d21 = d.dot(e1);
+            const double beta = denom > 0 ? (d11 * d20 - d01 * d21) / denom : 1.0 / 3;
+            const double gamma = denom > 0 ? (d00 * d21 - d01 * d20) / denom : 1.0 / 3;
+            const Eigen::Vector2f uv =
+                float(1 - beta - gamma) * uv0 + float(beta) * uv1 + float(gamma) * uv2;
+            sum += float(w) * sampleTexture(*c.texture, uv.x(), uv.y());
+            total += w;
+        }
+        if (total <= 0) return c.factor.cwiseProduct(sampleTexture(*c.texture, uv0.x(), uv0.y()));
+        return c.factor.cwiseProduct(sum / float(total));
+    }
+
+private:
+    const ingest::TriangleMesh& mMesh;
+    std::vector<Vec3> mPositions;
+    bool mHasUv = false;
+};
+
+// Pieces below this area (voxel units²) are slivers of exact arithmetic (collinear points on a
+// cutting plane), not surface: at N = 2^20 it is 1e-24 of the unit cube's face.
+constexpr double kMinPieceArea = 1e-12;
+
+bool isPowerOfTwo(std::uint32_t n) { return n != 0 && (n & (n - 1)) == 0; }
+
+void checkOptions(const SampleOptions& options) {
+    if (!isPowerOfTwo(options.resolution) || options.resolution > (1u << octree::kMaxLevel))
+        throw std::invalid_argument("resolution must be a power of two from 1 to 2^20");
+    if (options.region) {
+        for (int a = 0; a < 3; ++a)
+            if (options.region->max[a] > options.resolution || options.region->min[a] > options.region->max[a])
+                throw std::invalid_argument("region outside the volume");
+    }
+    if (!(options.solidDensity >= 0) || !std::isfinite(options.solidDensity))
+        throw std::invalid_argument("solid density must be finite and non-negative");
+    if (options.cyclic && options.solid == SolidMode::On)
+        throw std::invalid_argument("--solid on cannot be combined with --cyclic");
+}
+
+}  // namespace
+
+void referenceMapping(const ingest::TriangleMesh& mesh, BoundsMode bounds, double& scale,
+                      std::array<double, 3>& offset) {
+    scale = 1;
+    offset = {0, 0, 0};
+    if (bounds == BoundsMode::Unit || mesh.positions.empty()) return;
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = Eigen::Vector3d::Constant(-INFINITY);
+    for (const auto& p : mesh.positions) {
+        lo = lo.cwiseMin(p.cast<double>());
+        hi = hi.cwiseMax(p.cast<double>());
+    }
+    if (bounds == BoundsMode::Auto && lo.minCoeff() >= 0 && hi.maxCoeff() <= 1) return;
+    const double extent = (hi - lo).maxCoeff();
+    if (!(extent > 0) || !std::isfinite(extent)) return;
+    scale = 1.0 / extent;
+    for (int a = 0; a < 3; ++a) offset[std::size_t(a)] = -lo[a] * scale;
+}
+
+std::uint64_t estimateSampleMemory(const ingest::TriangleMesh& mesh, const SampleOptions& options) {
+    double scale;
+    std::array<double, 3> offset;
+    referenceMapping(mesh, options.bounds, scale, offset);
+    const double n = double(options.resolution), k = scale * n;
+    // Pieces of one triangle ≤ area·(|nx|+|ny|+|nz|) + perimeter·(number of axes) + 1 in voxel
+    // units: bounded here by √3·area + 2·perimeter + 2.
+    double pieces = 0;
+    for (const auto& t : mesh.triangles) {
+        if (t[0] >= mesh.positions.size() || t[1] >= mesh.positions.size() || t[2] >= mesh.positions.size())
+            continue;
+        const Vec3 a = mesh.positions[t[0]].cast<double>() * k, b = mesh.positions[t[1]].cast<double>() * k,
+                   c = mesh.positions[t[2]].cast<double>() * k;
+        const double area = 0.5 * (b - a).cross(c - a).norm();
+        const double perimeter = (b - a).norm() + (c - b).norm() + (a - c).norm();
+        pieces += 1.75 * area + 2 * perimeter + 2;
+    }
+    // Records twice (chunks and buckets), voxels at most one per piece, per-triangle data, and
+    // a solid classification proportional to the surface.
+    const double bytes = pieces * (2.0 * sizeof(Record) + sizeof(VolumeBlock) + 16) +
+                         double(mesh.triangles.size()) * 64 + double(mesh.positions.size()) * 48 + (1 << 20);
+    return std::uint64_t(std::min(bytes, 1.8e19));
+}
+
+octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOptions& options, Progress& progress) {
+    checkOptions(options);
+    if (options.maxMemoryBytes > 0) {
+        const std::uint64_t estimate = estimateSampleMemory(mesh, options);
+        if (estimate > options.maxMemoryBytes)
+            throw MemoryLimitError("resolution " + std::to_string(options.resolution) + " needs about " +
+                                   std::to_string(estimate >> 20) + " MiB, more than the limit of " +
+                                   std::to_string(options.maxMemoryBytes >> 20) + " MiB");
+    }
+    for (const auto& t : mesh.triangles)
+        if (t[0] >= mesh.positions.size() || t[1] >= mesh.positions.size() || t[2] >= mesh.positions.size())
+            throw std::invalid_argument("triangle index out of range");
+
+    const std::uint32_t n = options.resolution;
+    const std::uint32_t L = std::uint32_t(std::countr_zero(n));
+    octree::SparseVolume volume;
+    volume.info.levels = L;
+    volume.info.cyclic = options.cyclic;
+    referenceMapping(mesh, options.bounds, volume.info.scale, volume.info.offset);
+    const MeshView view(mesh, volume.info.scale, volume.info.offset, double(n));
+    const std::size_t triangleCount = mesh.triangles.size();
+    volume.info.sourceTriangles = triangleCount;
+
+    // Unit normals and areas (voxel units) of the triangles.
+    std::vector<Vec3> normals(triangleCount);
+    double totalArea = 0;
+    for (std::size_t t = 0; t < triangleCount; ++t) {
+        const Vec3 cross = (view.vertex(t, 1) - view.vertex(t, 0)).cross(view.vertex(t, 2) - view.vertex(t, 0));
+        const double norm = cross.norm();
+        normals[t] = norm > 0 && std::isfinite(norm) ? Vec3(cross / norm) : Vec3::Zero();
+        if (std::isfinite(norm)) totalArea += 0.5 * norm;
+    }
+    volume.info.sourceArea = totalArea / (double(n) * double(n));
+
+    const bool regionOnly = options.region.has_value();
+    const VoxelBox region = regionOnly ? *options.region : VoxelBox{{0, 0, 0}, {n, n, n}};
+
+    // Phase 1: clip.
+    const std::size_t chunkSize = std::max<std::size_t>(1024, (triangleCount + 255) / 256);
+    const std::size_t chunkCount = (triangleCount + chunkSize - 1) / chunkSize;
+    std::vector<std::vector<Record>> chunks(chunkCount);
+    progress.start("sample: clip", triangleCount);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunkCount, 1), [&](const auto& range) {
+        for (std::size_t ci = range.begin(); ci != range.end(); ++ci) {
+            auto& out = chunks[ci];
+            const std::size_t end = std::min(triangleCount, (ci + 1) * chunkSize);
+            for (std::size_t t = ci * chunkSize; t < end; ++t) {
+                if (normals[t].isZero()) continue;
+                const Vec3 a = view.vertex(t, 0), b = view.vertex(t, 1), c = view.vertex(t, 2);
+                if (regionOnly && !options.cyclic) {
+                    const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+                    bool outside = false;
+                    for (int ax = 0; ax < 3; ++ax)
+                        outside = outside || hi[ax] < double(region.min[std::size_t(ax)]) ||
+                                  lo[ax] > double(region.max[std::size_t(ax)]);
+                    if (outside) continue;
+                }
+                const TriangleColour colour = view.colour(t);
+                clipTriangleToGrid(a, b, c, n, options.cyclic,
+                                   [&](std::uint32_t x, std::uint32_t y, std::uint32_t z, const ClipPolygon& piece) {
+                                       if (regionOnly && !region.contains(x, y, z)) return;
+                                       const double area = piece.area();
+                                       if (!(area > kMinPieceArea)) return;
+                                       const Eigen::Vector3f rgb = view.pieceColour(t, colour, piece);
+                                       out.push_back(Record{octree::mortonEncode(x, y, z), std::uint32_t(t),
+                                                            float(area), {rgb.x(), rgb.y(), rgb.z()}});
+                                   });
+            }
+            progress.advance(end - ci * chunkSize);
+        }
+    });
+    progress.finish();
+
+    // Phase 2: scatter into buckets, chunk by chunk.
+    const std::uint32_t keyBits = 3 * L;
+    const std::uint32_t bucketShift = keyBits > 12 ? keyBits - 12 : 0;
+    const std::size_t bucketCount = std::size_t(1) << (keyBits - bucketShift);
+    std::vector<std::uint64_t> offsets(chunkCount * bucketCount + 1, 0);
+    tbb::parallel_for(std::size_t(0), chunkCount, [&](std::size_t ci) {
+        for (const auto& r : chunks[ci]) ++offsets[(r.key >> bucketShift) * chunkCount + ci + 1];
+    });
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());  // bucket-major, then chunk
+    const std::uint64_t recordCount = offsets.back();
+    std::vector<Record> records(recordCount);
+    tbb::parallel_for(std::size_t(0), chunkCount, [&](std::size_t ci) {
+        std::vector<std::uint64_t> cursor(bucketCount);
+        for (std::size_t b = 0; b < bucketCount; ++b) cursor[b] = offsets[b * chunkCount + ci];
+        for (const auto& r : chunks[ci]) records[cursor[r.key >> bucketShift]++] = r;
+        std::vector<Record>().swap(chunks[ci]);
+    });
+
+    // Phase 3: reduce each bucket.
+    const std::uint64_t fitSamples = options.fitErrorSamples;
+    const std::uint64_t fitThreshold =
+        (fitSamples == 0 || recordCount <= fitSamples)
+            ? ~std::uint64_t(0)
+            : std::uint64_t(double(fitSamples) / double(recordCount) * 18446744073709551615.0);
+    struct BucketOut {
+        std::vector<VolumeBlock> voxels;
+        double fitSum = 0, fitMax = 0;
+        std::uint64_t fitCount = 0;
+    };
+    std::vector<BucketOut> buckets(bucketCount);
+    progress.start("sample: voxels", bucketCount);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bucketCount, 4), [&](const auto& range) {
+        std::vector<Vec3> voxelNormals;
+        std::vector<double> weights;
+        for (std::size_t b = range.begin(); b != range.end(); ++b) {
+            const auto begin = records.begin() + std::ptrdiff_t(offsets[b * chunkCount]);
+            const auto end = records.begin() + std::ptrdiff_t(offsets[(b + 1) * chunkCount]);
+            std::sort(begin, end, [](const Record& x, const Record& y) {
+                return x.key != y.key ? x.key < y.key : x.tri < y.tri;
+            });
+            BucketOut& out = buckets[b];
+            for (auto run = begin; run != end;) {
+                auto runEnd = run;
+                double area = 0;
+                double rgb[3] = {0, 0, 0};
+                voxelNormals.clear();
+                weights.clear();
+                while (runEnd != end && runEnd->key == run->key) {
+                    const double a = runEnd->area;
+                    area += a;
+                    for (int c = 0; c < 3; ++c) rgb[c] += a * double(runEnd->rgb[std::size_t(c)]);
+                    voxelNormals.push_back(normals[runEnd->tri]);
+                    weights.push_back(a);
+                    ++runEnd;
+                }
+                VolumeBlock block;
+                block.key = run->key;
+                block.level = std::uint8_t(L);
+                block.data.density = float(area * double(n) * 0.5);  // (area/N²) / (2/N³)
+                for (int c = 0; c < 3; ++c) block.data.albedo[std::size_t(c)] = float(rgb[c] / area);
+                const auto fit = octree::Ellipsoid::fitNormals(voxelNormals, weights);
+                block.data.s = fit ? octree::packEllipsoid(*fit) : octree::isotropicS();
+                if (fit && mix64(run->key) <= fitThreshold) {
+                    const double e = octree::fitError(*fit, voxelNormals, weights);
+                    out.fitSum += e;
+                    out.fitMax = std::max(out.fitMax, e);
+                    ++out.fitCount;
+                }
+                if (block.data.density > 0) out.voxels.push_back(block);
+                run = runEnd;
+            }
+            progress.advance(1);
+        }
+    });
+    progress.finish();
+    std::vector<Record>().swap(records);
+    std::size_t voxelCount = 0;
+    for (const auto& b : buckets) voxelCount += b.voxels.size();
+    volume.blocks.reserve(voxelCount);
+    double fitSum = 0;
+    for (auto& b : buckets) {
+        volume.blocks.insert(volume.blocks.end(), b.voxels.begin(), b.voxels.end());
+        std::vector<VolumeBlock>().swap(b.voxels);
+        fitSum += b.fitSum;
+        volume.info.fitError.samples += b.fitCount;
+        volume.info.fitError.max = std::max(volume.info.fitError.max, b.fitMax);
+    }
+    if (volume.info.fitError.samples > 0) volume.info.fitError.mean = fitSum / double(volume.info.fitError.samples);
+
+    // Solid interior.
+    const bool solid = options.solid == SolidMode::On || (options.solid == SolidMode::Auto && mesh.closed && !options.cyclic);
+    if (options.solid == SolidMode::On && !mesh.closed)
+        throw InputError("<mesh>", "--solid on needs a closed (watertight) mesh");
+    if (solid && triangleCount > 0) {
+        // Ingest may split vertices along normal or UV seams: weld by exact position first.
+        std::vector<Vec3> welded;
+        std::vector<std::array<std::uint32_t, 3>> triangles(triangleCount);
+        {
+            struct Hash {
+                std::size_t operator()(const std::array<double, 3>& p) const {
+                    return std::size_t(mix64(std::bit_cast<std::uint64_t>(p[0]) ^
+                                             mix64(std::bit_cast<std::uint64_t>(p[1]) ^
+                                                   mix64(std::bit_cast<std::uint64_t>(p[2])))));
+                }
+            };
+            std::unordered_map<std::array<double, 3>, std::uint32_t, Hash> index;
+            std::vector<std::uint32_t> remap(view.positions().size());
+            for (std::size_t i = 0; i < view.positions().size(); ++i) {
+                const Vec3& p = view.positions()[i];
+                const auto [it, inserted] = index.try_emplace({p.x(), p.y(), p.z()}, std::uint32_t(welded.size()));
+                if (inserted) welded.push_back(p);
+                remap[i] = it->second;
+            }
+            for (std::size_t t = 0; t < triangleCount; ++t)
+                for (int k = 0; k < 3; ++k) triangles[t][std::size_t(k)] = remap[mesh.triangles[t][std::size_t(k)]];
+        }
+        std::unique_ptr<detail::InsideTest> insideTest;
+        try {
+            insideTest = std::make_unique<detail::InsideTest>(welded, triangles);
+        } catch (const std::runtime_error& e) {
+            if (options.solid == SolidMode::On)
+                throw InputError("<mesh>", std::string("--solid on: ") + e.what());
+        }
+        if (insideTest) {
+            const double rhoSolid = options.solidDensity > 0 ? options.solidDensity : 16.0 * double(n);
+            volume.info.solidDensity = float(rhoSolid);
+            octree::VoxelData solidData;
+            solidData.density = float(rhoSolid);
+            solidData.s = octree::isotropicS();
+            {
+                Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+                double weight = 0;
+                for (std::size_t t = 0; t < triangleCount; ++t) {
+                    const double a = 0.5 * (view.vertex(t, 1) - view.vertex(t, 0))
+                                               .cross(view.vertex(t, 2) - view.vertex(t, 0))
+                                               .norm();
+                    sum += a * view.colour(t).factor.cast<double>();
+                    weight += a;
+                }
+                const Eigen::Vector3d albedo = weight > 0 ? Eigen::Vector3d(sum / weight) : Eigen::Vector3d::Ones();
+                solidData.albedo = {float(albedo.x()), float(albedo.y()), float(albedo.z())};
+            }
+            // Top-down: nodes with surface below are opened; the others are tested once.
+            const std::vector<VolumeBlock>& surface = volume.blocks;
+            auto hasSurface = [&](std::uint32_t level, std::uint64_t key) {
+                const std::uint32_t shift = 3 * (L - level);
+                const std::uint64_t lo = key << shift, hi = (key + 1) << shift;
+                const auto it = std::lower_bound(surface.begin(), surface.end(), lo,
+                                                 [](const VolumeBlock& b, std::uint64_t k) { return b.key < k; });
+                return it != surface.end() && it->key < hi;
+            };
+            struct Node {
+                std::uint32_t level;
+                std::uint64_t key;
+            };
+            std::vector<Node> candidates, stack{{0, 0}};
+            while (!stack.empty()) {
+                const Node node = stack.back();
+                stack.pop_back();
+                const auto c = octree::mortonDecode(node.key);
+                const std::uint32_t s = L - node.level;
+                bool disjoint = false, within = true;
+                for (int a = 0; a < 3; ++a) {
+                    const std::uint32_t lo = c[std::size_t(a)] << s, hi = (c[std::size_t(a)] + 1) << s;
+                    disjoint = disjoint || hi <= region.min[std::size_t(a)] || lo >= region.max[std::size_t(a)];
+                    within = within && lo >= region.min[std::size_t(a)] && hi <= region.max[std::size_t(a)];
+                }
+                if (disjoint) continue;
+                if (within && !hasSurface(node.level, node.key)) {
+                    candidates.push_back(node);
+                } else if (node.level < L) {
+                    for (std::uint64_t k = 0; k < 8; ++k) stack.push_back({node.level + 1, (node.key << 3) | k});
+                }
+            }
+            std::vector<std::uint8_t> isInside(candidates.size(), 0);
+            progress.start("sample: solid", candidates.size());
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
+                for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                    const auto c = octree::mortonDecode(candidates[i].key);
+                    const double size = std::ldexp(1.0, int(L - candidates[i].level));
+                    const Vec3 centre((c[0] + 0.5) * size, (c[1] + 0.5) * size, (c[2] + 0.5) * size);
+                    isInside[i] = insideTest->inside(centre) ? 1 : 0;
+                }
+                progress.advance(range.size());
+            });
+            progress.finish();
+            for (std::size_t i = 0; i < candidates.size(); ++i)
+                if (isInside[i])
+                    volume.blocks.push_back(VolumeBlock{candidates[i].key, std::uint8_t(candidates[i].level), solidData});
+            volume.sortBlocks();
+        }
+    }
+    return volume;
+}
+
+}  // namespace vtex::sampler
