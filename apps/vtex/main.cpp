@@ -63,6 +63,10 @@ int main(int argc, char** argv) {
         for (auto& [sub, action] : actions)
             if (sub->parsed()) action(options);
         return exitCode(ExitStatus::Success);
+    } catch (const CLI::Error& e) {
+        // A flag combination an action found invalid after parsing is still bad usage.
+        std::cerr << "vtex: error: " << e.what() << '\n';
+        return exitCode(ExitStatus::Usage);
     } catch (const InputError& e) {
         std::cerr << "vtex: error: " << e.what() << '\n';
         return exitCode(ExitStatus::BadInput);
