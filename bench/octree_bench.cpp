@@ -29,27 +29,17 @@ Ellipsoid randomEllipsoid(std::mt19937& rng) {
     return Ellipsoid::fromAxes(R, Vec3(axis(rng), axis(rng), axis(rng)));
 }
 
-void BM_ProjectedArea(benchmark::State& state) {
+// A per-direction evaluation of one primitive, over 1024 precomputed directions.
+template <double (Ellipsoid::*evaluate)(const Vec3&) const>
+void BM_EvaluateDirection(benchmark::State& state) {
     std::mt19937 rng(1);
     const Ellipsoid e = randomEllipsoid(rng);
     const auto directions = randomDirections(1024, 2);
     std::size_t i = 0;
-    for (auto _ : state) {
-        benchmark::DoNotOptimize(e.projectedArea(directions[i++ & 1023]));
-    }
+    for (auto _ : state) benchmark::DoNotOptimize((e.*evaluate)(directions[i++ & 1023]));
 }
-BENCHMARK(BM_ProjectedArea);
-
-void BM_NormalDistribution(benchmark::State& state) {
-    std::mt19937 rng(1);
-    const Ellipsoid e = randomEllipsoid(rng);
-    const auto directions = randomDirections(1024, 3);
-    std::size_t i = 0;
-    for (auto _ : state) {
-        benchmark::DoNotOptimize(e.normalDistribution(directions[i++ & 1023]));
-    }
-}
-BENCHMARK(BM_NormalDistribution);
+BENCHMARK_TEMPLATE(BM_EvaluateDirection, &Ellipsoid::projectedArea)->Name("BM_ProjectedArea");
+BENCHMARK_TEMPLATE(BM_EvaluateDirection, &Ellipsoid::normalDistribution)->Name("BM_NormalDistribution");
 
 void BM_ConstructFromS(benchmark::State& state) {
     std::mt19937 rng(4);
