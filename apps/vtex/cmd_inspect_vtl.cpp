@@ -67,7 +67,7 @@ void inspectVtl(const std::filesystem::path& file, bool json, std::ostream& out)
     std::array<std::uint32_t, 3> lo{~0u, ~0u, ~0u}, hi{0, 0, 0};
     for (const auto& b : volume.blocks) {
         const double voxels = std::ldexp(1.0, 3 * int(L - b.level));
-        if (b.level == L) {
+        if (!b.isSolid()) {
             ++surface;
             surfaceArea += double(b.data.density) * 2.0 / std::ldexp(1.0, 3 * int(L));
         } else {

@@ -87,7 +87,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         }
         octree::writeVtl(volume, flags->output);
         std::uint64_t surface = 0, solid = 0;
-        for (const auto& b : volume.blocks) (b.level == volume.info.levels ? surface : solid)++;
+        for (const auto& b : volume.blocks) (b.isSolid() ? solid : surface)++;
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         char line[512];
         std::snprintf(line, sizeof line, "%s: %u^3, %llu surface voxels, %llu solid blocks, fit error %.3g, %.2f s -> %s",

@@ -111,7 +111,7 @@ std::string_view requireSection(const std::vector<InSection>& sections, std::str
 /// "section 'TAG'" for error locations.
 std::string sectionLocation(std::string_view tag);
 
-/// The 40-byte voxel record: density, S (6), albedo (3), all f32.
+/// The 44-byte voxel record: density, rotation (4), sigma (3), albedo (3), all f32.
 void writeVoxelData(ByteWriter& w, const VoxelData& d);
 VoxelData readVoxelData(ByteReader& r);
 /// A problem with a parsed voxel (non-finite, negative, empty when not allowed), or empty.

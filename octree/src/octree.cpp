@@ -57,7 +57,7 @@ std::vector<VolumeBlock> Octree::expandLevel(std::uint32_t level) const {
             if (node.data.isEmpty()) continue;
             const std::uint64_t copies = std::uint64_t(1) << (3 * (level - it.l));
             for (std::uint64_t c = 0; c < copies; ++c)
-                out.push_back(VolumeBlock{(it.key << (3 * (level - it.l))) | c, std::uint8_t(level), node.data});
+                out.push_back(VolumeBlock{(it.key << (3 * (level - it.l))) | c, std::uint8_t(level), 0, node.data});
             continue;
         }
         std::size_t child = node.firstChild + std::size_t(std::popcount(unsigned(node.childMask)));
@@ -78,7 +78,7 @@ std::optional<FilterRule> parseFilterRule(std::string_view name) {
 namespace {
 
 constexpr std::string_view kVtoMagic{"VTEX.VTO", 8};
-constexpr std::size_t kNodeRecordSize = 1 + 40;
+constexpr std::size_t kNodeRecordSize = 1 + 44;
 constexpr std::size_t kStatRecordSize = 8 * 7;
 
 std::string levelTag(std::uint32_t l) {

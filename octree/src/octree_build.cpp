@@ -110,7 +110,8 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, F
     p.density = float(mass / 8.0);
     for (int c = 0; c < 3; ++c) p.albedo[c] = mass > 0 ? float(albedo[c] / mass) : 0.0f;
     if (!out.ellipsoids.empty()) out.result = filterEllipsoids(out.ellipsoids, out.weights, rule);
-    p.s = out.result ? packEllipsoid(*out.result) : isotropicS();
+    if (out.result) packEllipsoid(*out.result, p);
+    else packIsotropic(p);
 }
 
 // Indices where a new parent starts in a sorted child level, restricted to `keep(parentKey)`.
@@ -302,7 +303,7 @@ void OctreeBuilder::updateRegion(const VoxelBox& region, std::vector<VolumeBlock
             if (disjoint(e, region)) kept.push_back(piece);
             else if (!inside(e, region))
                 for (std::uint64_t c = 0; c < 8; ++c)
-                    stack.push_back(VolumeBlock{(piece.key << 3) | c, std::uint8_t(piece.level + 1), piece.data});
+                    stack.push_back(VolumeBlock{(piece.key << 3) | c, std::uint8_t(piece.level + 1), piece.flags, piece.data});
         }
     }
     for (auto& b : blocks) kept.push_back(b);
@@ -376,8 +377,12 @@ Octree OctreeBuilder::compress(Progress& progress) const {
         std::array<float, 6> smin, smax;
         std::array<float, 3> amin, amax;
     };
+    // Ranges compare the matrices S (the quaternion of a primitive is not unique).
     auto pointRange = [](const VoxelData& d) {
-        return Range{d.density, d.density, d.s, d.s, d.albedo, d.albedo};
+        const Mat3 S = unpackS(d);
+        const std::array<float, 6> s{float(S(0, 0)), float(S(1, 1)), float(S(2, 2)),
+                                     float(S(0, 1)), float(S(0, 2)), float(S(1, 2))};
+        return Range{d.density, d.density, s, s, d.albedo, d.albedo};
     };
     std::vector<std::vector<std::uint8_t>> collapsible(L + 1);
     std::vector<Range> below, current;
@@ -394,6 +399,7 @@ Octree OctreeBuilder::compress(Progress& progress) const {
                 const PNode& node = level[i];
                 const VoxelData& p = node.data;
                 current[i] = pointRange(p);
+                const Range self = current[i];
                 if (node.flags & kSource) {
                     collapsible[l][i] = 1;
                     continue;
@@ -416,11 +422,12 @@ Octree OctreeBuilder::compress(Progress& progress) const {
                         r.amax[k] = std::max(r.amax[k], cr.amax[k]);
                     }
                 }
-                if (!ok) continue;
+                if (!ok || !m.options.compress) continue;
                 const double dTol = eps * double(p.density);
                 ok = double(p.density) - double(r.dmin) <= dTol && double(r.dmax) - double(p.density) <= dTol;
                 for (int k = 0; k < 6 && ok; ++k)
-                    ok = double(p.s[k]) - double(r.smin[k]) <= eps && double(r.smax[k]) - double(p.s[k]) <= eps;
+                    ok = double(self.smin[k]) - double(r.smin[k]) <= eps &&
+                         double(r.smax[k]) - double(self.smin[k]) <= eps;
                 for (int k = 0; k < 3 && ok; ++k)
                     ok = double(p.albedo[k]) - double(r.amin[k]) <= eps &&
                          double(r.amax[k]) - double(p.albedo[k]) <= eps;

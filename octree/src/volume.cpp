@@ -12,11 +12,13 @@ namespace vtex::octree {
 namespace {
 
 constexpr std::string_view kVtlMagic{"VTEX.VTL", 8};
-constexpr std::size_t kBlockRecordSize = 8 + 1 + 4 * 10;
+constexpr std::size_t kBlockRecordSize = 8 + 1 + 1 + 4 * 11;
 
 bool allFinite(const VoxelData& d) {
     if (!std::isfinite(d.density)) return false;
-    for (float v : d.s)
+    for (float v : d.rotation)
+        if (!std::isfinite(v)) return false;
+    for (float v : d.sigma)
         if (!std::isfinite(v)) return false;
     for (float v : d.albedo)
         if (!std::isfinite(v)) return false;
@@ -29,14 +31,16 @@ namespace detail {
 
 void writeVoxelData(ByteWriter& w, const VoxelData& d) {
     w.f32(d.density);
-    for (float v : d.s) w.f32(v);
+    for (float v : d.rotation) w.f32(v);
+    for (float v : d.sigma) w.f32(v);
     for (float v : d.albedo) w.f32(v);
 }
 
 VoxelData readVoxelData(ByteReader& r) {
     VoxelData d;
     d.density = r.f32();
-    for (float& v : d.s) v = r.f32();
+    for (float& v : d.rotation) v = r.f32();
+    for (float& v : d.sigma) v = r.f32();
     for (float& v : d.albedo) v = r.f32();
     return d;
 }
@@ -46,6 +50,8 @@ std::string checkVoxelData(const VoxelData& d, bool allowEmpty) {
     if (!allFinite(d)) return "non-finite value";
     if (d.density < 0) return "negative density";
     if (!allowEmpty && d.density == 0) return "empty voxel stored";
+    for (float v : d.sigma)
+        if (v < 0) return "negative sigma";
     return {};
 }
 
@@ -113,6 +119,7 @@ std::string serializeVtl(const SparseVolume& volume) {
     for (const auto& b : volume.blocks) {
         voxels.u64(b.key);
         voxels.u8(b.level);
+        voxels.u8(b.flags);
         writeVoxelData(voxels, b.data);
     }
     return writeContainer(kVtlMagic, kVtlVersion, {{"HEAD", head.str()}, {"VOXL", std::move(voxels.str())}});
@@ -140,9 +147,12 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
         VolumeBlock& b = volume.blocks[i];
         b.key = reader.u64();
         b.level = reader.u8();
+        b.flags = reader.u8();
         b.data = readVoxelData(reader);
         const std::string blockWhere = where + ", block " + std::to_string(i);
         if (b.level > L) throw InputError(file, "level deeper than the resolution", blockWhere);
+        if (b.flags > kBlockSolid) throw InputError(file, "unknown block flags", blockWhere);
+        if (b.level < L && !b.isSolid()) throw InputError(file, "coarse block that is not solid", blockWhere);
         if (b.key >= (std::uint64_t(1) << (3 * b.level))) throw InputError(file, "key out of range", blockWhere);
         if (const auto problem = checkVoxelData(b.data, false); !problem.empty())
             throw InputError(file, problem, blockWhere);

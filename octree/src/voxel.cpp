@@ -1,6 +1,8 @@
 // Voxel records and Morton keys (octree/include/vtex/octree/voxel.h).
 #include <vtex/octree/voxel.h>
 
+#include <Eigen/Geometry>
+
 namespace vtex::octree {
 namespace {
 
@@ -35,29 +37,36 @@ std::array<std::uint32_t, 3> mortonDecode(std::uint64_t key) {
     return {compact3(key), compact3(key >> 1), compact3(key >> 2)};
 }
 
-std::array<float, 6> packSymmetric(const Mat3& m) {
-    return {float(m(0, 0)), float(m(1, 1)), float(m(2, 2)),
-            float(0.5 * (m(0, 1) + m(1, 0))), float(0.5 * (m(0, 2) + m(2, 0))),
-            float(0.5 * (m(1, 2) + m(2, 1)))};
+void packEllipsoid(const Ellipsoid& ellipsoid, VoxelData& voxel) {
+    const Ellipsoid e = ellipsoid.normalized(Normalization::Exact);
+    Mat3 basis = e.basis();
+    if (basis.determinant() < 0) basis.col(0) = -basis.col(0);  // axes have no sign
+    Eigen::Quaterniond q(basis);
+    q.normalize();
+    if (q.w() < 0) q.coeffs() = -q.coeffs();
+    voxel.rotation = {float(q.x()), float(q.y()), float(q.z()), float(q.w())};
+    const Vec3& a = e.semiAxes();
+    constexpr double kPi = 3.14159265358979323846;
+    voxel.sigma = {float(kPi * a[1] * a[2]), float(kPi * a[0] * a[2]), float(kPi * a[0] * a[1])};
 }
 
-Mat3 unpackSymmetric(const std::array<float, 6>& s) {
-    Mat3 m;
-    m << s[0], s[3], s[4],  //
-        s[3], s[1], s[5],   //
-        s[4], s[5], s[2];
-    return m;
-}
-
-std::array<float, 6> packEllipsoid(const Ellipsoid& ellipsoid) {
-    return packSymmetric(ellipsoid.normalized(Normalization::Exact).S());
+Mat3 unpackS(const VoxelData& voxel) {
+    Eigen::Quaterniond q(voxel.rotation[3], voxel.rotation[0], voxel.rotation[1], voxel.rotation[2]);
+    if (q.norm() == 0) return Mat3::Zero();
+    const Mat3 R = q.normalized().toRotationMatrix();
+    const Vec3 s2(double(voxel.sigma[0]) * voxel.sigma[0], double(voxel.sigma[1]) * voxel.sigma[1],
+                  double(voxel.sigma[2]) * voxel.sigma[2]);
+    return R * s2.asDiagonal() * R.transpose();
 }
 
 std::optional<Ellipsoid> unpackEllipsoid(const VoxelData& voxel) {
     if (voxel.isEmpty()) return std::nullopt;
-    return Ellipsoid::fromS(unpackSymmetric(voxel.s));
+    return Ellipsoid::fromS(unpackS(voxel));
 }
 
-std::array<float, 6> isotropicS() { return {1, 1, 1, 0, 0, 0}; }
+void packIsotropic(VoxelData& voxel) {
+    voxel.rotation = {0, 0, 0, 1};
+    voxel.sigma = {1, 1, 1};
+}
 
 }  // namespace vtex::octree

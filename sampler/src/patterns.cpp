@@ -451,12 +451,15 @@ ingest::TriangleMesh wrapIntoUnitTile(const ingest::TriangleMesh& mesh) {
                             hasUv ? Vec2(mesh.uvs[i].cast<double>()) : Vec2::Zero()});
         const std::uint32_t material = mesh.triangleMaterials.empty() ? 0 : mesh.triangleMaterials[t];
         peelCells(poly, 0, [&](double cx, const AttributedPolygon& px) {
-            peelCells(px, 1, [&](double cy, const AttributedPolygon& piece) {
+            peelCells(px, 1, [&](double cy, const AttributedPolygon& py) {
+              // Below the ground or above the tile: cut away (bases of tilted blades and hairs).
+              peelCells(py, 2, [&](double cz, const AttributedPolygon& piece) {
+                if (cz != 0 && !(cz == 1 && maxCoord(piece, 2) == 1)) return;
                 const std::uint32_t first = std::uint32_t(out.positions.size());
                 for (const auto& v : piece) {
                     Vec3 p = v.p - Vec3(cx, cy, 0);
                     // Exactly on the far border after the shift: keep it inside the tile.
-                    for (int a = 0; a < 2; ++a) p[a] = std::clamp(p[a], 0.0, 1.0);
+                    for (int a = 0; a < 3; ++a) p[a] = std::clamp(p[a], 0.0, 1.0);
                     out.positions.push_back(p.cast<float>());
                     out.normals.push_back(v.n.cast<float>());
                     if (hasUv) out.uvs.push_back(v.uv.cast<float>());
@@ -468,6 +471,7 @@ ingest::TriangleMesh wrapIntoUnitTile(const ingest::TriangleMesh& mesh) {
                     out.triangles.push_back({first, first + std::uint32_t(k), first + std::uint32_t(k + 1)});
                     out.triangleMaterials.push_back(material);
                 }
+              });
             });
         });
     }

@@ -349,7 +349,8 @@ octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOp
                 block.data.density = float(area * double(n) * 0.5);  // (area/N²) / (2/N³)
                 for (int c = 0; c < 3; ++c) block.data.albedo[std::size_t(c)] = float(rgb[c] / area);
                 const auto fit = octree::Ellipsoid::fitNormals(voxelNormals, weights);
-                block.data.s = fit ? octree::packEllipsoid(*fit) : octree::isotropicS();
+                if (fit) octree::packEllipsoid(*fit, block.data);
+                else octree::packIsotropic(block.data);
                 if (fit && mix64(run->key) <= fitThreshold) {
                     const double e = octree::fitError(*fit, voxelNormals, weights);
                     out.fitSum += e;
@@ -416,7 +417,7 @@ octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOp
             volume.info.solidDensity = float(rhoSolid);
             octree::VoxelData solidData;
             solidData.density = float(rhoSolid);
-            solidData.s = octree::isotropicS();
+            octree::packIsotropic(solidData);
             {
                 Eigen::Vector3d sum = Eigen::Vector3d::Zero();
                 double weight = 0;
@@ -476,7 +477,8 @@ octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOp
             progress.finish();
             for (std::size_t i = 0; i < candidates.size(); ++i)
                 if (isInside[i])
-                    volume.blocks.push_back(VolumeBlock{candidates[i].key, std::uint8_t(candidates[i].level), solidData});
+                    volume.blocks.push_back(VolumeBlock{candidates[i].key, std::uint8_t(candidates[i].level),
+                                                        octree::kBlockSolid, solidData});
             volume.sortBlocks();
         }
     }

@@ -94,6 +94,8 @@ struct BuildOptions {
     /// Filtered nodes per level on which the filter error is measured (a deterministic,
     /// hash-selected sample); 0 measures all of them.
     std::uint64_t filterErrorSamples = 4096;
+    /// false: store every non-empty node (no compression), for comparisons and tests.
+    bool compress = true;
 };
 
 /// Builds every level from the sampled finest level, keeping the uncompressed pyramid so that

@@ -18,11 +18,16 @@
 
 namespace vtex::octree {
 
+/// VolumeBlock::flags: the block is solid interior (not surface).
+inline constexpr std::uint8_t kBlockSolid = 1;
+
 /// A stored voxel or uniform block: `key` is the Morton key at `level` (≤ the finest level).
 struct VolumeBlock {
     std::uint64_t key = 0;
     std::uint8_t level = 0;
+    std::uint8_t flags = 0;  ///< kBlockSolid or 0 (surface)
     VoxelData data;
+    bool isSolid() const { return (flags & kBlockSolid) != 0; }
     friend bool operator==(const VolumeBlock&, const VolumeBlock&) = default;
 };
 

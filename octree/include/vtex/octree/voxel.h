@@ -2,10 +2,13 @@
 /// @brief What one voxel (or one octree node) stores, and the Morton keys that name voxels.
 ///
 /// A voxel of the reference volume (the unit cube, 2^L voxels per side at level L) holds a
-/// density ρ (1/length, reference units), the micro-primitive as its SGGX matrix S normalised to
-/// unit mean apparent area (DESIGN.md, "The micro-primitive"), and a linear-RGB albedo. S is
-/// symmetric, so 6 floats suffice; docs/formats.md gives the order. An empty voxel has ρ = 0 and
-/// is never stored.
+/// density ρ (1/length, reference units), the micro-primitive normalised to unit mean apparent
+/// area (DESIGN.md, "The micro-primitive") and a linear-RGB albedo. The primitive is stored as
+/// its SGGX matrix in eigen-form, S = R diag(σ²) Rᵀ: R as a unit quaternion and the three σ
+/// (the projected areas along the axes). The 6 entries of S in float would not do: a disc's S
+/// has in-plane eigenvalues 1e-8 of the largest (the axis-ratio floor squared), below float
+/// resolution, so its in-plane shape would be rounding noise; σ keeps them to 7 digits. An empty
+/// voxel has ρ = 0 and is never stored.
 #pragma once
 
 #include <vtex/octree/ellipsoid.h>
@@ -27,28 +30,27 @@ std::uint64_t mortonEncode(std::uint32_t x, std::uint32_t y, std::uint32_t z);
 /// The inverse of mortonEncode.
 std::array<std::uint32_t, 3> mortonDecode(std::uint64_t key);
 
-/// One voxel or node. Plain data; 40 bytes.
+/// One voxel or node. Plain data; 44 bytes.
 struct VoxelData {
     float density = 0;  ///< ρ, 1/length in reference units; 0 = empty
-    /// The SGGX matrix of the micro-primitive, normalised (Exact) to unit mean apparent area:
-    /// Sxx, Syy, Szz, Sxy, Sxz, Syz. All zero for an empty voxel.
-    std::array<float, 6> s{};
+    /// The axes R of the primitive as a unit quaternion (x, y, z, w), w ≥ 0.
+    std::array<float, 4> rotation{0, 0, 0, 1};
+    /// σ along R's columns: S = R diag(σ²) Rᵀ, normalised (Exact) to unit mean apparent area.
+    /// Zero for an empty voxel.
+    std::array<float, 3> sigma{};
     std::array<float, 3> albedo{};  ///< linear RGB
 
     bool isEmpty() const { return density == 0; }
     friend bool operator==(const VoxelData&, const VoxelData&) = default;
 };
 
-/// Packs a symmetric matrix into the 6-float order of VoxelData::s.
-std::array<float, 6> packSymmetric(const Mat3& m);
-/// Unpacks VoxelData::s.
-Mat3 unpackSymmetric(const std::array<float, 6>& s);
-/// The normalised S of an ellipsoid (any size), packed.
-std::array<float, 6> packEllipsoid(const Ellipsoid& ellipsoid);
-/// The ellipsoid a voxel stores; empty for an empty voxel or a degenerate S.
+/// Stores an ellipsoid (any size: it is normalised first) into `voxel`'s rotation and sigma.
+void packEllipsoid(const Ellipsoid& ellipsoid, VoxelData& voxel);
+/// The ellipsoid a voxel stores; empty for an empty voxel or a degenerate σ.
 std::optional<Ellipsoid> unpackEllipsoid(const VoxelData& voxel);
-
-/// The normalised S of an isotropic primitive (a sphere): the identity.
-std::array<float, 6> isotropicS();
+/// The SGGX matrix S = R diag(σ²) Rᵀ a voxel stores (double precision).
+Mat3 unpackS(const VoxelData& voxel);
+/// Stores the isotropic primitive (a sphere, S = identity).
+void packIsotropic(VoxelData& voxel);
 
 }  // namespace vtex::octree

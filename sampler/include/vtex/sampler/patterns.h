@@ -44,7 +44,8 @@ bool isCyclicPattern(std::string_view name);
 ingest::TriangleMesh makePattern(std::string_view name, const PatternOptions& options);
 
 /// Cuts `mesh` along the planes x = k and y = k (integers) and moves every piece into the unit
-/// tile [0,1)², interpolating normals and UVs; the area is unchanged. Used by cyclic patterns.
+/// tile [0,1)², interpolating normals and UVs, so the area is unchanged; what lies below z = 0
+/// or above z = 1 is cut away. Used by cyclic patterns.
 ingest::TriangleMesh wrapIntoUnitTile(const ingest::TriangleMesh& mesh);
 
 }  // namespace vtex::sampler

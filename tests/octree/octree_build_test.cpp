@@ -1,0 +1,305 @@
+// The sparse octree: filtering, compression, lossless tolerance 0, partial recompute.
+#include <vtex/octree/octree.h>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <random>
+
+namespace vtex::octree {
+namespace {
+
+VoxelData randomVoxel(std::mt19937& rng) {
+    std::uniform_real_distribution<double> u(0.05, 1.0);
+    VoxelData d;
+    d.density = float(u(rng) * 10);
+    Eigen::Quaterniond q(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+    packEllipsoid(Ellipsoid::fromAxes(q.normalized().toRotationMatrix(), Vec3(u(rng), u(rng), u(rng))), d);
+    d.albedo = {float(u(rng)), float(u(rng)), float(u(rng))};
+    return d;
+}
+
+// A random sparse surface-like volume: `count` random voxels.
+SparseVolume randomVolume(std::uint32_t levels, std::size_t count, unsigned seed) {
+    std::mt19937 rng(seed);
+    SparseVolume v;
+    v.info.levels = levels;
+    const std::uint32_t n = 1u << levels;
+    std::uniform_int_distribution<std::uint32_t> c(0, n - 1);
+    std::vector<std::uint64_t> keys;
+    for (std::size_t i = 0; i < count; ++i) keys.push_back(mortonEncode(c(rng), c(rng), c(rng)));
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    for (auto k : keys) v.blocks.push_back(VolumeBlock{k, std::uint8_t(levels), 0, randomVoxel(rng)});
+    return v;
+}
+
+// Solid half-space x + 2y + 3z < 3N: a constant region with a slanted boundary.
+SparseVolume halfSpace(std::uint32_t levels) {
+    SparseVolume v;
+    v.info.levels = levels;
+    const std::uint32_t n = 1u << levels;
+    VoxelData d;
+    d.density = 5;
+    packIsotropic(d);
+    d.albedo = {0.5f, 0.5f, 0.5f};
+    for (std::uint32_t z = 0; z < n; ++z)
+        for (std::uint32_t y = 0; y < n; ++y)
+            for (std::uint32_t x = 0; x < n; ++x)
+                if (x + 2 * y + 3 * z < 3 * n) v.blocks.push_back(VolumeBlock{mortonEncode(x, y, z), std::uint8_t(levels), 0, d});
+    v.sortBlocks();
+    return v;
+}
+
+Octree build(const SparseVolume& v, double tolerance = 0, bool compress = true,
+             FilterRule rule = FilterRule::Sggx) {
+    BuildOptions o;
+    o.tolerance = tolerance;
+    o.compress = compress;
+    o.rule = rule;
+    NullProgress progress;
+    return buildOctree(v, o, progress);
+}
+
+std::vector<VolumeBlock> expandBlocks(const SparseVolume& v) {
+    std::vector<VolumeBlock> out;
+    for (const auto& b : v.blocks) {
+        const std::uint32_t s = v.info.levels - b.level;
+        for (std::uint64_t c = 0; c < (std::uint64_t(1) << (3 * s)); ++c)
+            out.push_back(VolumeBlock{(b.key << (3 * s)) | c, std::uint8_t(v.info.levels), 0, b.data});
+    }
+    return out;
+}
+
+TEST(OctreeBuild, MortonKeysRoundTrip) {
+    std::mt19937 rng(1);
+    std::uniform_int_distribution<std::uint32_t> c(0, (1u << 20) - 1);
+    for (int i = 0; i < 10000; ++i) {
+        const std::array<std::uint32_t, 3> p{c(rng), c(rng), c(rng)};
+        EXPECT_EQ(mortonDecode(mortonEncode(p[0], p[1], p[2])), p);
+    }
+    EXPECT_EQ(mortonEncode(1, 0, 0), 1u);
+    EXPECT_EQ(mortonEncode(0, 1, 0), 2u);
+    EXPECT_EQ(mortonEncode(0, 0, 1), 4u);
+}
+
+TEST(OctreeBuild, PackedEllipsoidKeepsDiscsAndNeedles) {
+    const Mat3 R = Eigen::Quaterniond(0.3, -0.2, 0.8, 0.1).normalized().toRotationMatrix();
+    for (const Vec3& axes : {Vec3(1e-5, 1, 1), Vec3(1, 1, 1e5), Vec3(0.3, 1.0, 2.5)}) {
+        const Ellipsoid e = Ellipsoid::fromAxes(R, axes).normalized();
+        VoxelData d;
+        d.density = 1;
+        packEllipsoid(e, d);
+        const auto back = unpackEllipsoid(d);
+        ASSERT_TRUE(back);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(back->semiAxes()[k] / e.semiAxes()[k], 1.0, 1e-4) << axes.transpose();
+        // S itself, including the eigenvalues 1e-8 below the largest that 6 floats would lose.
+        const Mat3 R2 = back->basis().transpose() * e.basis();  // the same axes, up to sign/order
+        const Vec3& a = e.semiAxes();
+        auto distinct = [](double x, double y) { return std::abs(x - y) > 1e-9 * std::max(x, y); };
+        for (int k = 0; k < 3; ++k)
+            if ((k == 0 || distinct(a[k], a[k - 1])) && (k == 2 || distinct(a[k], a[k + 1]))) {
+                EXPECT_GT(std::abs(R2(k, k)), 0.9999) << axes.transpose();
+            }
+        EXPECT_LT((unpackS(d) - e.S()).norm(), 1e-6 * e.S().norm());
+    }
+}
+
+TEST(OctreeBuild, EmptyVolumeStoresOneNode) {
+    SparseVolume v;
+    v.info.levels = 6;
+    const Octree tree = build(v);
+    EXPECT_EQ(tree.storedNodes(), 1u);
+    EXPECT_EQ(tree.levels[0][0].data.density, 0.0f);
+    EXPECT_TRUE(tree.levels[0][0].isLeaf());
+    EXPECT_DOUBLE_EQ(tree.compression(), 1.0 - 1.0 / (64.0 * 64 * 64));
+    EXPECT_FALSE(tree.find(6, 3, 4, 5));
+}
+
+TEST(OctreeBuild, ConstantHalfSpaceStoresOrderNSquaredNodes) {
+    std::uint64_t stored[3];
+    for (std::uint32_t l = 4; l <= 6; ++l) {
+        const auto v = halfSpace(l);
+        const Octree tree = build(v);
+        stored[l - 4] = tree.storedNodes();
+        const double n = double(1u << l);
+        EXPECT_LT(double(tree.storedNodes()), 16 * n * n) << l;
+        EXPECT_LT(tree.storedNodes(), v.blocks.size() / 3) << l;
+        // Every finest voxel is still there, exactly.
+        EXPECT_EQ(tree.expandLevel(l), v.blocks);
+    }
+    // Doubling N multiplies the storage by about 4 (the boundary), not 8 (the volume).
+    for (int i = 0; i < 2; ++i) {
+        const double growth = double(stored[i + 1]) / double(stored[i]);
+        EXPECT_GT(growth, 3.0);
+        EXPECT_LT(growth, 5.0);
+    }
+}
+
+TEST(OctreeBuild, ParentIsTheMeanOfItsChildren) {
+    const auto v = randomVolume(4, 600, 3);
+    const Octree tree = build(v, 0, false);
+    // Density: the mean of 8 children (empty ones count 0), so the level mean is conserved.
+    for (std::uint32_t l = 0; l <= 4; ++l) EXPECT_NEAR(tree.stats[l].meanDensity, tree.stats[4].meanDensity, 1e-5);
+    for (std::uint32_t l = 0; l < 4; ++l) {
+        for (const auto& node : tree.levels[l]) {
+            double sum = 0, albedo = 0;
+            for (int c = 0; c < std::popcount(unsigned(node.childMask)); ++c) {
+                const auto& child = tree.levels[l + 1][node.firstChild + std::size_t(c)];
+                sum += child.data.density;
+                albedo += child.data.density * child.data.albedo[0];
+            }
+            ASSERT_NEAR(node.data.density, sum / 8, 1e-5 * sum);
+            ASSERT_NEAR(node.data.albedo[0], albedo / sum, 1e-5);
+        }
+    }
+}
+
+TEST(OctreeBuild, ToleranceZeroLosesNothing) {
+    // Random voxels plus constant blocks so that something collapses.
+    auto v = randomVolume(5, 3000, 4);
+    VoxelData solid;
+    solid.density = 80;
+    packIsotropic(solid);
+    solid.albedo = {0.2f, 0.3f, 0.4f};
+    std::vector<VolumeBlock> blocks;
+    for (const auto& b : v.blocks)
+        if (mortonDecode(b.key)[2] < 16) blocks.push_back(b);
+    for (std::uint32_t y = 0; y < 4; ++y)
+        for (std::uint32_t x = 0; x < 4; ++x)
+            blocks.push_back(VolumeBlock{mortonEncode(x, y, 3), 2, kBlockSolid, solid});  // z ∈ [24, 32)
+    // Equal finest voxels in z ∈ [16, 24), x, y < 16: they collapse only if filtering is exact.
+    for (std::uint32_t z = 16; z < 24; ++z)
+        for (std::uint32_t y = 0; y < 16; ++y)
+            for (std::uint32_t x = 0; x < 16; ++x) blocks.push_back(VolumeBlock{mortonEncode(x, y, z), 5, 0, solid});
+    v.blocks = blocks;
+    v.sortBlocks();
+    const Octree compressed = build(v, 0), full = build(v, 0, false);
+    EXPECT_LT(compressed.storedNodes(), full.storedNodes());
+    for (std::uint32_t l = 0; l <= 5; ++l) EXPECT_EQ(compressed.expandLevel(l), full.expandLevel(l)) << l;
+    EXPECT_EQ(compressed.expandLevel(5), expandBlocks(v));
+    // A rebuild from the compressed tree's finest level gives the uncompressed tree again.
+    SparseVolume rebuilt;
+    rebuilt.info = v.info;
+    rebuilt.blocks = compressed.expandLevel(5);
+    const Octree again = build(rebuilt, 0, false);
+    for (std::uint32_t l = 0; l <= 5; ++l) EXPECT_EQ(again.expandLevel(l), full.expandLevel(l)) << l;
+}
+
+TEST(OctreeBuild, ToleranceBoundsEveryVoxelALeafStandsFor) {
+    auto v = halfSpace(5);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> jitter(0.97f, 1.03f);
+    for (auto& b : v.blocks) b.data.density *= jitter(rng);  // ±3% noise on a constant region
+    const double eps = 0.07;
+    const Octree exact = build(v, 0), loose = build(v, eps);
+    EXPECT_LT(loose.storedNodes(), exact.storedNodes() / 4);
+    const auto expanded = loose.expandLevel(5);
+    ASSERT_EQ(expanded.size(), v.blocks.size());
+    for (std::size_t i = 0; i < expanded.size(); ++i) {
+        ASSERT_EQ(expanded[i].key, v.blocks[i].key);
+        ASSERT_LE(std::abs(expanded[i].data.density - v.blocks[i].data.density), eps * expanded[i].data.density + 1e-6);
+    }
+}
+
+TEST(OctreeBuild, FindMatchesTheExpandedLevels) {
+    const auto v = randomVolume(4, 500, 5);
+    const Octree tree = build(v, 0.5);
+    for (std::uint32_t l = 0; l <= 4; ++l) {
+        const auto blocks = tree.expandLevel(l);
+        std::size_t found = 0;
+        const std::uint32_t n = 1u << l;
+        for (std::uint32_t z = 0; z < n; ++z)
+            for (std::uint32_t y = 0; y < n; ++y)
+                for (std::uint32_t x = 0; x < n; ++x)
+                    if (auto f = tree.find(l, x, y, z)) {
+                        ++found;
+                        const auto it = std::lower_bound(blocks.begin(), blocks.end(), mortonEncode(x, y, z),
+                                                         [](const VolumeBlock& b, std::uint64_t k) { return b.key < k; });
+                        ASSERT_NE(it, blocks.end());
+                        EXPECT_EQ(it->key, mortonEncode(x, y, z));
+                        EXPECT_EQ(it->data, f->node->data);
+                    }
+        EXPECT_EQ(found, blocks.size()) << l;
+    }
+}
+
+TEST(OctreeBuild, BothRulesMeasureAFilterErrorPerLevel) {
+    const auto v = randomVolume(4, 800, 6);
+    const Octree sggx = build(v, 0, true, FilterRule::Sggx), neyret = build(v, 0, true, FilterRule::Neyret);
+    for (std::uint32_t l = 0; l < 4; ++l) {
+        EXPECT_GT(sggx.stats[l].filterErrorSamples, 0u);
+        EXPECT_GT(sggx.stats[l].filterErrorMean, 0.0);
+        EXPECT_GT(neyret.stats[l].filterErrorMean, 0.0);
+        EXPECT_NE(sggx.stats[l].filterErrorMean, neyret.stats[l].filterErrorMean);
+    }
+    EXPECT_EQ(sggx.stats[4].filterErrorSamples, 0u);
+    EXPECT_NE(sggx.levels[0][0].data, neyret.levels[0][0].data);
+}
+
+TEST(OctreeBuild, PartialRecomputeEqualsAFullRebuild) {
+    for (int scenario = 0; scenario < 4; ++scenario) {
+        const double tolerance = scenario % 2 ? 0.2 : 0.0;
+        const bool withSolid = scenario >= 2;
+        // Before: random voxels (and a solid block); after: the region's content replaced.
+        auto before = randomVolume(5, 2500, 7);
+        VoxelData solid;
+        solid.density = 50;
+        packIsotropic(solid);
+        if (withSolid) before.blocks.push_back(VolumeBlock{mortonEncode(1, 1, 1), 3, kBlockSolid, solid});  // [4,8)³
+        // Remove random voxels that overlap the solid block.
+        std::vector<VolumeBlock> kept;
+        for (const auto& b : before.blocks) {
+            const auto c = mortonDecode(b.key);
+            if (b.level == 5 && c[0] >= 4 && c[0] < 8 && c[1] >= 4 && c[1] < 8 && c[2] >= 4 && c[2] < 8) continue;
+            kept.push_back(b);
+        }
+        before.blocks = kept;
+        before.sortBlocks();
+        const VoxelBox region{{6, 5, 3}, {13, 21, 30}};  // cuts through the solid block
+        const auto replacement = randomVolume(5, 2500, 8);
+        std::vector<VolumeBlock> inside;
+        for (const auto& b : replacement.blocks) {
+            const auto c = mortonDecode(b.key);
+            if (region.contains(c[0], c[1], c[2])) inside.push_back(b);
+        }
+        // The expected volume: outside the region as before (the solid block's outside part as
+        // voxels), inside the replacement.
+        SparseVolume after;
+        after.info = before.info;
+        for (const auto& b : expandBlocks(before)) {
+            const auto c = mortonDecode(b.key);
+            if (!region.contains(c[0], c[1], c[2])) after.blocks.push_back(b);
+        }
+        for (const auto& b : inside) after.blocks.push_back(b);
+        after.sortBlocks();
+
+        BuildOptions o;
+        o.tolerance = tolerance;
+        NullProgress progress;
+        OctreeBuilder builder(before, o, progress);
+        const std::uint64_t fullCount = builder.filteredNodeCount();
+        builder.updateRegion(region, inside, progress);
+        const std::uint64_t updateCount = builder.filteredNodeCount() - fullCount;
+        const Octree updated = builder.compress(progress);
+        const Octree rebuilt = buildOctree(after, o, progress);
+        for (std::uint32_t l = 0; l <= 5; ++l) EXPECT_EQ(updated.expandLevel(l), rebuilt.expandLevel(l)) << l;
+        EXPECT_LT(updateCount, fullCount / 2) << scenario;  // only the ancestors of the region
+        if (!withSolid) {
+            EXPECT_EQ(updated.levels, rebuilt.levels) << scenario;
+            EXPECT_EQ(updated.stats, rebuilt.stats) << scenario;
+        } else {
+            // The solid block's outside part stays as coarse blocks after the update, where the
+            // reference holds it voxel by voxel: the same values (above), stored differently.
+            for (std::uint32_t l = 0; l <= 5; ++l) {
+                EXPECT_EQ(updated.stats[l].occupiedNodes, rebuilt.stats[l].occupiedNodes);
+                EXPECT_NEAR(updated.stats[l].meanDensity, rebuilt.stats[l].meanDensity, 1e-9);
+            }
+        }
+    }
+}
+
+}  // namespace
+}  // namespace vtex::octree

@@ -1,0 +1,143 @@
+// The .vtl and .vto files: bit-exact round trips; corruption, truncation and future versions
+// refused with the failing section named.
+#include <vtex/core/error.h>
+#include <vtex/octree/octree.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <random>
+
+namespace vtex::octree {
+namespace {
+
+SparseVolume smallVolume() {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.05, 1.0);
+    SparseVolume v;
+    v.info.levels = 3;
+    v.info.cyclic = true;
+    v.info.scale = 0.5;
+    v.info.offset = {0.25, 0.125, 0};
+    v.info.sourceTriangles = 77;
+    v.info.sourceArea = 1.25;
+    v.info.fitError = {12, 0.01, 0.05};
+    for (std::uint64_t key = 0; key < 512; key += 1 + key % 7) {
+        VoxelData d;
+        d.density = float(u(rng) * 4);
+        packEllipsoid(Ellipsoid::fromAxes(Mat3::Identity(), Vec3(u(rng), u(rng), u(rng))), d);
+        d.albedo = {float(u(rng)), float(u(rng)), float(u(rng))};
+        v.blocks.push_back(VolumeBlock{key, 3, 0, d});
+    }
+    return v;
+}
+
+Octree smallOctree() {
+    NullProgress progress;
+    return buildOctree(smallVolume(), {}, progress);
+}
+
+template <class Parse>
+void expectAllCorruptionRefused(const std::string& bytes, Parse parse) {
+    std::mt19937 rng(2024);
+    std::uniform_int_distribution<std::size_t> bit(0, bytes.size() * 8 - 1);
+    for (int i = 0; i < 10000; ++i) {
+        std::string flipped = bytes;
+        const std::size_t b = bit(rng);
+        flipped[b / 8] = char(flipped[b / 8] ^ (1 << (b % 8)));
+        try {
+            parse(flipped);
+            ADD_FAILURE() << "bit " << b << " flipped, not detected";
+            return;
+        } catch (const InputError& e) {
+            ASSERT_FALSE(e.location().empty()) << e.what();
+        }
+    }
+    for (int k = 0; k < 64; ++k) {
+        const std::size_t size = bytes.size() * std::size_t(k) / 64;
+        EXPECT_THROW(parse(bytes.substr(0, size)), InputError) << "truncated to " << size;
+    }
+    EXPECT_THROW(parse(bytes + "x"), InputError);
+}
+
+TEST(VtlFormat, RoundTripIsBitExact) {
+    const SparseVolume v = smallVolume();
+    const std::string bytes = serializeVtl(v);
+    const SparseVolume back = parseVtl(bytes, "mem.vtl");
+    EXPECT_EQ(back, v);
+    EXPECT_EQ(serializeVtl(back), bytes);
+    const auto path = std::filesystem::path(VTEX_TEST_TMP) / "round.vtl";
+    std::filesystem::create_directories(path.parent_path());
+    writeVtl(v, path);
+    EXPECT_EQ(readVtl(path), v);
+}
+
+TEST(VtoFormat, RoundTripIsBitExact) {
+    const Octree tree = smallOctree();
+    const std::string bytes = serializeVto(tree);
+    const Octree back = parseVto(bytes, "mem.vto");
+    EXPECT_EQ(back, tree);
+    EXPECT_EQ(serializeVto(back), bytes);
+    const auto path = std::filesystem::path(VTEX_TEST_TMP) / "round.vto";
+    std::filesystem::create_directories(path.parent_path());
+    writeVto(tree, path);
+    EXPECT_EQ(readVto(path), tree);
+}
+
+TEST(VtoFormat, EverySingleBitFlipAndTruncationIsRefused) {
+    const std::string bytes = serializeVto(smallOctree());
+    ASSERT_LT(bytes.size(), 64u * 1024);
+    expectAllCorruptionRefused(bytes, [](const std::string& b) { parseVto(b, "t.vto"); });
+}
+
+TEST(VtlFormat, EverySingleBitFlipAndTruncationIsRefused) {
+    const std::string bytes = serializeVtl(smallVolume());
+    expectAllCorruptionRefused(bytes, [](const std::string& b) { parseVtl(b, "t.vtl"); });
+}
+
+TEST(VtoFormat, ErrorsNameTheFailingSection) {
+    const std::string bytes = serializeVto(smallOctree());
+    // A flipped byte in the last level's payload.
+    std::string corrupt = bytes;
+    corrupt[bytes.size() - 3] ^= 0x10;
+    try {
+        parseVto(corrupt, "c.vto");
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.location(), "section 'LV03'");
+        EXPECT_NE(std::string(e.what()).find("checksum"), std::string::npos);
+    }
+    // A future version.
+    std::string future = bytes;
+    future[8] = 2;
+    try {
+        parseVto(future, "f.vto");
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.location(), "header");
+        EXPECT_NE(std::string(e.what()).find("newer"), std::string::npos) << e.what();
+    }
+    // Not a .vto at all: a .vtl.
+    EXPECT_THROW(parseVto(serializeVtl(smallVolume()), "x.vto"), InputError);
+    // checkFile reports per-section status without throwing.
+    const FileCheck check = checkFile(corrupt, std::string_view("VTEX.VTO", 8), kVtoVersion);
+    ASSERT_TRUE(check.headerOk);
+    EXPECT_FALSE(check.sections.back().checksumOk);
+    EXPECT_TRUE(check.sections.front().checksumOk);
+}
+
+TEST(VtoFormat, ConsistentButWrongContentIsRefused) {
+    // Valid checksums around an impossible tree: the validator, not only the checksum, refuses.
+    Octree tree = smallOctree();
+    tree.levels[3][0].childMask = 1;  // a finest-level node with children
+    EXPECT_THROW(parseVto(serializeVto(tree), "bad.vto"), InputError);
+    tree = smallOctree();
+    tree.levels[2][0].data.density = -1;
+    EXPECT_THROW(parseVto(serializeVto(tree), "bad.vto"), InputError);
+    SparseVolume v = smallVolume();
+    std::swap(v.blocks[0], v.blocks[1]);  // out of order
+    EXPECT_THROW(parseVtl(serializeVtl(v), "bad.vtl"), InputError);
+}
+
+}  // namespace
+}  // namespace vtex::octree
