@@ -7,6 +7,8 @@
 #include <vtex/core/error.h>
 #include <vtex/ingest/base_mesh.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -61,7 +63,8 @@ QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& op
         const Eigen::Vector3d area = (c - a).cross(d - b);
         for (auto v : q) {
             const auto& p = raw.positions[v];
-            byPosition[{p.x(), p.y(), p.z()}] += area;
+            // (Eigen vectors are not zero-initialised by default.)
+            byPosition.try_emplace({p.x(), p.y(), p.z()}, Eigen::Vector3d::Zero()).first->second += area;
         }
     }
     mesh.normals.resize(mesh.positions.size(), Eigen::Vector3f::UnitZ());

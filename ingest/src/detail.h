@@ -51,6 +51,10 @@ bool isContainedRegularFile(const std::filesystem::path& root, const std::filesy
 RawMesh readGltf(std::string_view bytes, bool binary, const std::filesystem::path& file,
                  const std::filesystem::path& directory, const IngestOptions& options);
 
+/// Checks the JSON types of the glTF properties vtex relies on and the required extensions
+/// (tinygltf silently skips a property of the wrong type). Throws InputError.
+void checkGltfSchema(std::string_view json, const std::filesystem::path& file);
+
 RawMesh readObj(std::string_view text, const std::filesystem::path& file,
                 const std::filesystem::path& directory, const IngestOptions& options);
 

@@ -152,42 +152,6 @@ std::string_view checkGlbContainer(std::string_view bytes, const fs::path& file)
     return bytes.substr(20, jsonLength);
 }
 
-bool isBase64Payload(std::string_view uri) {
-    const auto comma = uri.find(',');
-    if (comma == std::string_view::npos) return false;
-    const std::string_view header = uri.substr(0, comma);
-    if (header.size() < 7 || header.substr(header.size() - 7) != ";base64") return false;
-    std::string_view payload = uri.substr(comma + 1);
-    if (payload.size() % 4) return false;
-    std::size_t padding = 0;
-    for (std::size_t i = 0; i < payload.size(); ++i) {
-        const unsigned char c = static_cast<unsigned char>(payload[i]);
-        if (c == '=') {
-            if (i + 2 < payload.size()) return false;
-            ++padding;
-        } else if (padding || !(std::isalnum(c) || c == '+' || c == '/')) {
-            return false;
-        }
-    }
-    return true;
-}
-
-// A URI that is absolute or climbs out of the folder is refused outright, whatever the file
-// system callbacks found (they refuse it too; this gives the clearer message).
-void checkUri(const std::string& uri, const std::string& where, const fs::path& file) {
-    if (uri.empty()) return;
-    if (uri.rfind("data:", 0) == 0) {
-        if (!isBase64Payload(uri)) throw InputError(file, "data URI is not valid base64", where);
-        return;
-    }
-    const fs::path path(uri);
-    bool escapes = path.is_absolute() || uri.find(':') != std::string::npos || uri[0] == '\\';
-    for (const auto& part : path)
-        if (part == "..") escapes = true;
-    if (escapes)
-        throw InputError(file, "URI '" + uri + "' escapes the input's folder (refused)", where);
-}
-
 // --- accessors ------------------------------------------------------------------------------
 
 int componentSize(int componentType) {
@@ -449,10 +413,6 @@ public:
 
     void build() {
         mDecoder.checkBufferViews();
-        for (std::size_t i = 0; i < mModel.buffers.size(); ++i)
-            checkUri(mModel.buffers[i].uri, "buffers[" + std::to_string(i) + "]", mFile);
-        for (std::size_t i = 0; i < mModel.images.size(); ++i)
-            checkUri(mModel.images[i].uri, "images[" + std::to_string(i) + "]", mFile);
 
         // Roots: the default scene, scene 0, or every node that is nobody's child.
         std::vector<int> roots;
@@ -633,18 +593,19 @@ private:
                 if (n != vertexCount) throw InputError(mFile, "NORMAL count differs from POSITION count", where);
             }
             const int material = materialIndex(primitive.material, where);
+            // UVs: the set the base-colour texture samples, else TEXCOORD_0, kept either way.
             std::vector<double> uvs;
-            if (mOut.materials[std::size_t(material)].baseColorTexture >= 0) {
-                const std::string name = "TEXCOORD_" + std::to_string(mMaterialTexCoord[material]);
+            {
+                const bool textured = mOut.materials[std::size_t(material)].baseColorTexture >= 0;
+                const std::string name = "TEXCOORD_" + std::to_string(textured ? mMaterialTexCoord[material] : 0);
                 if (auto uv = primitive.attributes.find(name); uv != primitive.attributes.end()) {
                     std::size_t n = 0;
                     uvs = mDecoder.readAccessor(uv->second, {2}, true, &n, &components);
                     if (n != vertexCount) throw InputError(mFile, name + " count differs from POSITION count", where);
-                } else {
+                } else if (textured) {
                     warnOnce(where + ": textured material without " + name + "; texture unused here");
                 }
             }
-
             // Corner indices, then triangles by mode.
             std::vector<std::uint32_t> corners;
             if (primitive.indices >= 0) {
@@ -748,7 +709,9 @@ RawMesh readGltf(std::string_view bytes, bool binary, const fs::path& file, cons
     if (bytes.empty()) throw InputError(file, "empty file");
     if (bytes.size() > std::numeric_limits<unsigned int>::max())
         throw InputError(file, "larger than 4 GiB, which glTF cannot address");
-    checkJsonDepth(binary ? checkGlbContainer(bytes, file) : bytes, file);
+    const std::string_view json = binary ? checkGlbContainer(bytes, file) : bytes;
+    checkJsonDepth(json, file);
+    checkGltfSchema(json, file);
 
     FsContext context;
     context.maxBytes = options.maxFileBytes;

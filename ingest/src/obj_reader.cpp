@@ -101,6 +101,9 @@ public:
             throw InputError(mFile, mSkippedPrimitives ? "no faces (points and lines only)" : "no faces");
         // Normals and UVs: keep the arrays only when some corner had them.
         if (!mAnyNormal) mOut.normals.clear();
+        std::vector<char> usedPositions(mPositions.size(), 0);
+        for (const auto& [corner, index] : mVertexIndex) usedPositions[std::size_t(corner.v)] = 1;
+        mOut.repairs.unreferencedVertices = std::uint64_t(std::count(usedPositions.begin(), usedPositions.end(), 0));
         if (!mAnyUv) mOut.uvs.clear();
         return std::move(mOut);
     }

@@ -315,7 +315,17 @@ RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format, cons
         const auto& p = mesh.point(vh);
         out.positions.emplace_back(p[0], p[1], p[2]);
     }
-    if (readOptions.check(OpenMesh::IO::Options::VertexNormal)) {
+    // OpenMesh leaves the VertexNormal option set (and the normals unset) when the file has
+    // none, so ask the header: "NOFF"/"CNOFF"/..., or a PLY vertex property "nx".
+    bool fileHasNormals = false;
+    if (format == "off") {
+        const std::string_view magic = bytes.substr(0, std::min<std::size_t>(bytes.find_first_of(" \t\r\n"), 8));
+        fileHasNormals = magic.find('N') != std::string_view::npos;
+    } else if (format == "ply") {
+        const std::string_view header = bytes.substr(0, bytes.find("end_header"));
+        fileHasNormals = header.find(" nx\n") != std::string_view::npos || header.find(" nx\r") != std::string_view::npos;
+    }
+    if (fileHasNormals && readOptions.check(OpenMesh::IO::Options::VertexNormal)) {
         out.normals.reserve(mesh.n_vertices());
         for (const auto vh : mesh.vertices()) {
             const auto& n = mesh.normal(vh);

@@ -321,7 +321,8 @@ TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const 
     std::vector<char> referenced(n, 0);
     for (const auto& f : kept)
         for (auto v : f) referenced[v] = 1;
-    counts.unreferencedVertices = std::uint64_t(std::count(referenced.begin(), referenced.end(), 0));
+    // Plus what a reader already knew (OBJ `v` lines no face used never became raw vertices).
+    counts.unreferencedVertices += std::uint64_t(std::count(referenced.begin(), referenced.end(), 0));
 
     // Materials and textures travel unchanged; at least one material.
     mesh.materials = std::move(raw.materials);

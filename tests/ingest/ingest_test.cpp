@@ -1,0 +1,344 @@
+// What ingest must get right on valid input: transforms, primitive modes, accessor kinds,
+// repairs, orientation, formats, the canonical .glb round trip and the base quad mesh.
+#include "gltf_builder.h"
+
+#include <vtex/core/error.h>
+#include <vtex/ingest/base_mesh.h>
+#include <vtex/ingest/ingest.h>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+
+namespace fs = std::filesystem;
+using namespace vtex;
+using namespace vtex::ingest;
+using vtex::test::GltfBuilder;
+
+namespace {
+
+fs::path tmp(const std::string& name) {
+    const fs::path dir = fs::path(VTEX_TEST_TMP) / "ingest";
+    fs::create_directories(dir);
+    return dir / name;
+}
+
+TriangleMesh loadText(const std::string& name, const std::string& bytes, IngestReport* report = nullptr,
+                      IngestOptions options = {}) {
+    const fs::path path = tmp(name);
+    test::writeBytes(path, bytes);
+    return loadMesh(path, options, report);
+}
+
+Eigen::Vector3f faceNormal(const TriangleMesh& m, std::size_t t) {
+    const auto& tri = m.triangles[t];
+    return (m.positions[tri[1]] - m.positions[tri[0]]).cross(m.positions[tri[2]] - m.positions[tri[0]]).normalized();
+}
+
+// An axis-aligned unit cube as 12 triangles; inward=true winds every face the wrong way.
+std::string cubeObj(bool inward) {
+    std::string s = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
+    const int faces[6][4] = {{1, 4, 3, 2}, {5, 6, 7, 8}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 4, 8, 7}, {4, 1, 5, 8}};
+    for (const auto& f : faces) {
+        if (inward) s += "f " + std::to_string(f[3]) + " " + std::to_string(f[2]) + " " + std::to_string(f[1]) + " " + std::to_string(f[0]) + "\n";
+        else s += "f " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) + " " + std::to_string(f[3]) + "\n";
+    }
+    return s;
+}
+
+void expectOutward(const TriangleMesh& m) {
+    Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+    for (const auto& p : m.positions) centre += p;
+    centre /= float(m.positions.size());
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+        const auto& tri = m.triangles[t];
+        const Eigen::Vector3f c = (m.positions[tri[0]] + m.positions[tri[1]] + m.positions[tri[2]]) / 3;
+        EXPECT_GT(faceNormal(m, t).dot(c - centre), 0) << "triangle " << t << " points inward";
+        for (auto v : tri) EXPECT_GT(m.normals[v].dot(faceNormal(m, t)), 0) << "normal disagrees with winding";
+    }
+}
+
+TEST(Ingest, GlbRoundTripIsExactAndCanonical) {
+    TriangleMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0.5f}};
+    mesh.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+    mesh.uvs = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    mesh.triangles = {{0, 1, 2}, {1, 3, 2}};
+    mesh.triangleMaterials = {0, 1};
+    mesh.materials.resize(2);
+    mesh.materials[1].baseColorFactor = {0.5f, 0.25f, 1.0f, 1.0f};
+    mesh.materials[1].baseColorTexture = 0;
+    mesh.textures.push_back({2, 1, {255, 0, 0, 255, 0, 255, 0, 128}});
+    const fs::path path = tmp("roundtrip.glb");
+    writeMeshGlb(mesh, path);
+    IngestReport report;
+    const TriangleMesh back = loadMesh(path, {}, &report);
+    ASSERT_EQ(back.triangles.size(), 2u);
+    ASSERT_EQ(back.positions.size(), 4u);
+    EXPECT_EQ(report.repairs.recomputedNormals, 0u);
+    ASSERT_EQ(back.textures.size(), 1u);
+    EXPECT_EQ(back.textures[0].width, 2);
+    EXPECT_EQ(back.textures[0].rgba, mesh.textures[0].rgba);
+    ASSERT_EQ(back.materials.size(), 2u);
+    EXPECT_FLOAT_EQ(back.materials[1].baseColorFactor[1], 0.25f);
+    EXPECT_EQ(back.materials[1].baseColorTexture, 0);
+    ASSERT_EQ(back.triangleMaterials.size(), 2u);
+    // Writing what was read gives the same bytes: the canonical form is a fixed point.
+    EXPECT_EQ(encodeMeshGlb(back), encodeMeshGlb(loadMesh(path)));
+    for (std::size_t t = 0; t < 2; ++t)
+        if (back.triangleMaterials[t] == 1) {
+            std::vector<Eigen::Vector3f> corners;
+            for (auto v : back.triangles[t]) corners.push_back(back.positions[v]);
+            EXPECT_TRUE(std::find(corners.begin(), corners.end(), Eigen::Vector3f(1, 1, 0.5f)) != corners.end());
+        }
+}
+
+TEST(Ingest, NodeTransformsAreBakedWithNormalsByInverseTranspose) {
+    GltfBuilder b;
+    const int pos = b.positions(vtex::test::kTriangle);
+    const int nrm = b.accessor(b.view(std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1}), 5126, 3, "VEC3");
+    // Parent translates by (10,0,0); child rotates 90° about x and scales y by 2.
+    b.doc["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}}}}}}}};
+    const double s = std::sqrt(0.5);
+    b.doc["nodes"] = {{{"translation", {10, 0, 0}}, {"children", {1}}},
+                      {{"mesh", 0}, {"rotation", {s, 0, 0, s}}, {"scale", {1, 2, 1}}}};
+    b.doc["scenes"] = {{{"nodes", {0}}}};
+    const TriangleMesh m = loadText("trs.gltf", b.gltfEmbedded());
+    ASSERT_EQ(m.triangles.size(), 1u);
+    // (0,1,0) → scale (0,2,0) → rotate about x (0,0,2) → translate (10,0,2).
+    bool seen = false;
+    for (const auto& p : m.positions) seen |= p.isApprox(Eigen::Vector3f(10, 0, 2), 1e-5f);
+    EXPECT_TRUE(seen);
+    // The plane z=0 becomes the plane y=0 with normal (0,-1,0)... after rotation +z → -y.
+    for (const auto& n : m.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, -1, 0), 1e-5f)) << n.transpose();
+    EXPECT_GT(faceNormal(m, 0).dot(m.normals[m.triangles[0][0]]), 0.99f);
+}
+
+TEST(Ingest, MatrixWithMirrorFlipsWinding) {
+    GltfBuilder b;
+    const int pos = b.positions(vtex::test::kTriangle);
+    b.meshNode({{"attributes", {{"POSITION", pos}}}},
+               {{"matrix", {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}}});
+    const TriangleMesh m = loadText("mirror.gltf", b.gltfEmbedded());
+    ASSERT_EQ(m.triangles.size(), 1u);
+    // Mirrored in x, the triangle still faces +z because its winding was flipped.
+    EXPECT_GT(faceNormal(m, 0).z(), 0.99f);
+    EXPECT_GT(m.normals[0].z(), 0.99f);
+}
+
+TEST(Ingest, StripsFansAndNonIndexed) {
+    const std::vector<float> quad = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+    for (int mode : {5, 6}) {
+        GltfBuilder b;
+        const int pos = b.positions(quad);
+        std::vector<std::uint32_t> order = mode == 5 ? std::vector<std::uint32_t>{0, 1, 2, 3}
+                                                     : std::vector<std::uint32_t>{0, 1, 3, 2};
+        const int idx = b.indices(order);
+        b.meshNode({{"attributes", {{"POSITION", pos}}}, {"indices", idx}, {"mode", mode}});
+        IngestReport report;
+        const TriangleMesh m = loadText("mode" + std::to_string(mode) + ".glb", b.glb(), &report);
+        ASSERT_EQ(m.triangles.size(), 2u) << "mode " << mode;
+        for (std::size_t t = 0; t < 2; ++t) EXPECT_GT(faceNormal(m, t).z(), 0.99f) << "mode " << mode;
+    }
+    GltfBuilder b;
+    const int pos = b.positions(quad);
+    b.meshNode({{"attributes", {{"POSITION", pos}}}, {"mode", 0}});  // points: skipped
+    const int pos2 = b.positions(vtex::test::kTriangle);
+    b.meshNode({{"attributes", {{"POSITION", pos2}}}});  // non-indexed triangles
+    IngestReport report;
+    const TriangleMesh m = loadText("mixed.glb", b.glb(), &report);
+    EXPECT_EQ(m.triangles.size(), 1u);
+    EXPECT_FALSE(report.warnings.empty());
+}
+
+TEST(Ingest, ComponentTypesNormalizedStrideAndSparse) {
+    GltfBuilder b;
+    // Positions as normalized unsigned shorts, interleaved with padding (stride 8).
+    std::vector<std::uint16_t> interleaved = {0, 0, 0, 7, 65535, 0, 0, 7, 0, 65535, 0, 7};
+    const int view = b.view(interleaved, 8);
+    const int pos = b.accessor(view, 5123, 3, "VEC3", {{"normalized", true}});
+    // Indices as unsigned bytes.
+    const int idx = b.accessor(b.view(std::vector<std::uint8_t>{0, 1, 2, 0}), 5121, 3, "SCALAR");
+    b.meshNode({{"attributes", {{"POSITION", pos}}}, {"indices", idx}});
+    // A second primitive: sparse positions over a zero accessor (no bufferView).
+    const int sparseIdx = b.view(std::vector<std::uint16_t>{1, 2});
+    const int sparseVal = b.view(std::vector<float>{2, 0, 0, 0, 2, 0});
+    const int pos2 = b.accessor(-1, 5126, 3, "VEC3",
+                                {{"sparse", {{"count", 2},
+                                             {"indices", {{"bufferView", sparseIdx}, {"componentType", 5123}}},
+                                             {"values", {{"bufferView", sparseVal}}}}}});
+    b.meshNode({{"attributes", {{"POSITION", pos2}}}});
+    // Signed normalized bytes for the second primitive's normals: (0,0,127) → (0,0,1).
+    IngestReport report;
+    const TriangleMesh m = loadText("types.glb", b.glb(), &report);
+    ASSERT_EQ(m.triangles.size(), 2u);
+    bool unit = false, sparse = false;
+    for (const auto& p : m.positions) {
+        unit |= p.isApprox(Eigen::Vector3f(1, 0, 0));
+        sparse |= p.isApprox(Eigen::Vector3f(2, 0, 0));
+    }
+    EXPECT_TRUE(unit);
+    EXPECT_TRUE(sparse);
+}
+
+TEST(Ingest, ClosedMeshIsOrientedOutward) {
+    for (bool inward : {false, true}) {
+        IngestReport report;
+        const TriangleMesh m = loadText(inward ? "cube_in.obj" : "cube_out.obj", cubeObj(inward), &report);
+        EXPECT_TRUE(m.closed);
+        EXPECT_TRUE(report.closed);
+        EXPECT_EQ(m.triangles.size(), 12u);
+        EXPECT_EQ(report.repairs.flippedFaces, inward ? 12u : 0u);
+        expectOutward(m);
+    }
+    // A cube with one face wound the other way is fixed face by face.
+    std::string mixed = cubeObj(false);
+    mixed.replace(mixed.find("f 1 4 3 2"), 9, "f 2 3 4 1");
+    IngestReport report;
+    const TriangleMesh m = loadText("cube_mixed.obj", mixed, &report);
+    EXPECT_TRUE(m.closed);
+    EXPECT_EQ(report.repairs.flippedFaces, 2u);
+    expectOutward(m);
+    // An open box (5 faces) is not closed and keeps its winding.
+    std::string open = cubeObj(true);
+    open = open.substr(0, open.rfind("f "));
+    const TriangleMesh o = loadText("open.obj", open, &report);
+    EXPECT_FALSE(o.closed);
+    EXPECT_EQ(report.repairs.flippedFaces, 0u);
+}
+
+TEST(Ingest, RepairsAreCounted) {
+    // Duplicate vertices (within tolerance), a degenerate and a zero-area face, an unused vertex.
+    const std::string obj =
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e-9 0 0\nv 1 1 0\nv 2 0 0\nv 5 5 5\n"
+        "f 4 2 3\nf 2 5 3\nf 1 2 4\nf 1 2 6\n";
+    IngestReport report;
+    const TriangleMesh m = loadText("repairs.obj", obj, &report);
+    EXPECT_EQ(m.triangles.size(), 2u);
+    EXPECT_EQ(report.repairs.mergedVertices, 1u);
+    EXPECT_EQ(report.repairs.degenerateFaces, 1u);
+    EXPECT_EQ(report.repairs.zeroAreaFaces, 1u);
+    EXPECT_EQ(report.repairs.unreferencedVertices, 3u);  // v1 (merged away: its only face became degenerate), v6, v7
+    EXPECT_EQ(report.trianglesIn, 4u);
+    EXPECT_EQ(report.trianglesOut, 2u);
+    // The report names them.
+    const std::string json = toJson(report);
+    EXPECT_NE(json.find("\"zero_area_faces\": 1"), std::string::npos) << json;
+    EXPECT_NE(json.find("\"closed\": false"), std::string::npos);
+}
+
+TEST(Ingest, DropInvalidCountsInsteadOfRefusing) {
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 0\nf 1 2 3\nf 1 2 9\nf 1 2 4\n";
+    EXPECT_THROW(loadText("invalid_strict.obj", obj), InputError);
+    IngestOptions options;
+    options.dropInvalidFaces = true;
+    IngestReport report;
+    const TriangleMesh m = loadText("invalid_drop.obj", obj, &report, options);
+    EXPECT_EQ(m.triangles.size(), 1u);
+    EXPECT_EQ(report.repairs.invalidIndexFaces, 1u);
+    EXPECT_EQ(report.repairs.nonFiniteFaces, 1u);
+}
+
+TEST(Ingest, NormalsFromFileWhenValidElseComputed) {
+    // Vertex 1's normal is zero (invalid) and vertex 2's points against the winding.
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 0\nvn 0 0 -1\nf 1//1 2//2 3//3\n";
+    IngestReport report;
+    const TriangleMesh m = loadText("normals.obj", obj, &report);
+    EXPECT_EQ(report.repairs.recomputedNormals, 1u);
+    EXPECT_EQ(report.repairs.flippedNormals, 1u);
+    for (const auto& n : m.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, 0, 1)));
+}
+
+TEST(Ingest, ObjMaterialsNegativeIndicesAndPolygons) {
+    test::writeBytes(tmp("objmat/m.mtl"), "newmtl red\nKd 1 0 0\nnewmtl half\nKd 0.5 0.5 0.5\nd 0.5\n");
+    const std::string obj =
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nusemtl red\nf -5 -4 -3 -2\nusemtl half\nf 2 5 3\n";
+    test::writeBytes(tmp("objmat/a.obj"), obj);
+    IngestReport report;
+    const TriangleMesh m = loadMesh(tmp("objmat/a.obj"), {}, &report);
+    ASSERT_EQ(m.triangles.size(), 3u);
+    ASSERT_EQ(m.triangleMaterials.size(), 3u);
+    const Material& red = m.materials[m.triangleMaterials[0]];
+    EXPECT_FLOAT_EQ(red.baseColorFactor[0], 1.0f);
+    EXPECT_FLOAT_EQ(red.baseColorFactor[1], 0.0f);
+    const Material& half = m.materials[m.triangleMaterials[2]];
+    EXPECT_FLOAT_EQ(half.baseColorFactor[3], 0.5f);
+}
+
+TEST(Ingest, OffPlyStlThroughOpenMesh) {
+    // A unit square, counter-clockwise seen from +z, in each format.
+    IngestReport report;
+    TriangleMesh m = loadText("sq.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", &report);
+    ASSERT_EQ(m.triangles.size(), 2u);
+    for (std::size_t t = 0; t < 2; ++t) EXPECT_GT(faceNormal(m, t).z(), 0.99f);
+    m = loadText("sq.ply",
+                 "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");
+    ASSERT_EQ(m.triangles.size(), 2u);
+    for (std::size_t t = 0; t < 2; ++t) EXPECT_GT(faceNormal(m, t).z(), 0.99f);
+    // Binary STL: 80-byte header, count, then normal + 3 vertices + attribute per triangle.
+    std::string stl(80, ' ');
+    auto put = [&stl](auto v) { stl.append(reinterpret_cast<const char*>(&v), sizeof v); };
+    put(std::uint32_t(2));
+    const float tris[2][9] = {{0, 0, 0, 1, 0, 0, 1, 1, 0}, {0, 0, 0, 1, 1, 0, 0, 1, 0}};
+    for (const auto& t : tris) {
+        for (float f : {0.f, 0.f, 1.f}) put(f);
+        for (float f : t) put(f);
+        put(std::uint16_t(0));
+    }
+    m = loadText("sq.stl", stl, &report);
+    ASSERT_EQ(m.triangles.size(), 2u);
+    EXPECT_EQ(m.positions.size(), 4u);  // welded
+    for (std::size_t t = 0; t < 2; ++t) EXPECT_GT(faceNormal(m, t).z(), 0.99f);
+}
+
+TEST(Ingest, MaxTrianglesIsEnforced) {
+    IngestOptions options;
+    options.maxTriangles = 11;
+    EXPECT_THROW(loadText("cube_limit.obj", cubeObj(false), nullptr, options), InputError);
+    options.maxTriangles = 12;
+    EXPECT_NO_THROW(loadText("cube_limit.obj", cubeObj(false), nullptr, options));
+}
+
+TEST(Ingest, TexturedGltfFromDebianSamples) {
+    const fs::path box = "/usr/share/assimp/models/glTF2/BoxTextured-glTF/BoxTextured.gltf";
+    if (!fs::exists(box)) GTEST_SKIP() << "assimp-testmodels not installed";
+    IngestReport report;
+    const TriangleMesh m = loadMesh(box, {}, &report);
+    EXPECT_EQ(m.triangles.size(), 12u);
+    ASSERT_EQ(m.textures.size(), 1u);
+    EXPECT_EQ(m.textures[0].width, 211);
+    EXPECT_EQ(m.uvs.size(), m.positions.size());
+    EXPECT_TRUE(m.closed);
+    expectOutward(m);
+    // Written and read back, the texture travels inside the .glb.
+    writeMeshGlb(m, tmp("box.glb"));
+    const TriangleMesh back = loadMesh(tmp("box.glb"));
+    ASSERT_EQ(back.textures.size(), 1u);
+    EXPECT_EQ(back.textures[0].rgba, m.textures[0].rgba);
+}
+
+TEST(BaseMesh, QuadsStayQuadsTrianglesCollapse) {
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nv 3 0 0\n"
+                            "f 1 2 3 4\nf 2 5 6 3\nf 5 7 6\n";
+    test::writeBytes(tmp("base.obj"), obj);
+    const QuadMesh q = loadBaseMesh(tmp("base.obj"));
+    ASSERT_EQ(q.quads.size(), 3u);
+    EXPECT_FALSE(q.isTriangle(0));
+    EXPECT_FALSE(q.isTriangle(1));
+    EXPECT_TRUE(q.isTriangle(2));
+    EXPECT_EQ(q.quads[0], (std::array<std::uint32_t, 4>{0, 1, 2, 3}));
+    ASSERT_EQ(q.normals.size(), q.positions.size());
+    for (const auto& n : q.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, 0, 1)));
+    test::writeBytes(tmp("base.off"),
+                    "OFF\n7 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n2 1 0\n3 0.5 0\n4 0 1 2 3\n5 1 4 6 5 2\n");
+    const QuadMesh off = loadBaseMesh(tmp("base.off"));
+    ASSERT_EQ(off.quads.size(), 3u);  // a quad, then a pentagon as a quad and a triangle
+    EXPECT_FALSE(off.isTriangle(1));
+    EXPECT_TRUE(off.isTriangle(2));
+    for (const auto& n : off.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, 0, 1))) << n.transpose();
+}
+
+}  // namespace
