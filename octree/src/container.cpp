@@ -97,8 +97,15 @@ std::string readTable(std::string_view bytes, std::string_view magic, std::uint3
         entry.offset = table.u64();
         entry.size = table.u64();
         entry.sum = table.u64();
-        if (entry.offset != expected) return "section " + std::to_string(i) + " at a wrong offset";
-        if (entry.size > bytes.size()) return "section " + std::to_string(i) + " larger than the file";
+        if (entry.offset != expected) {
+            location = sectionLocation(printableTag(entry.tag));
+            return "at a wrong offset";
+        }
+        if (entry.size > bytes.size() || entry.offset + entry.size > bytes.size()) {
+            location = sectionLocation(printableTag(entry.tag));
+            return "truncated (" + std::to_string(entry.size) + " bytes claimed, the file ends after " +
+                   std::to_string(bytes.size() - std::min<std::uint64_t>(bytes.size(), entry.offset)) + ")";
+        }
         expected += entry.size;
         entries.push_back(std::move(entry));
     }

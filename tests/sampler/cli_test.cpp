@@ -1,0 +1,80 @@
+// `vtex pattern | sample | build | inspect` end to end, and the refusals' exit statuses.
+#include "run_vtex.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace vtex::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path tmp(const std::string& name) {
+    const fs::path dir = fs::path(VTEX_TEST_TMP) / "cli";
+    fs::create_directories(dir);
+    return dir / name;
+}
+
+TEST(SamplerCli, PatternSampleBuildInspect) {
+    const auto glb = tmp("grass.glb"), vtl = tmp("grass.vtl"), vto = tmp("grass.vto");
+    auto r = runVtex({"pattern", "grass", "-o", glb.string(), "--seed", "4"});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    r = runVtex({"sample", glb.string(), "-o", vtl.string(), "--resolution", "32", "--cyclic"});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    r = runVtex({"build", vtl.string(), "-o", vto.string(), "--filter", "neyret", "--tolerance", "0.01"});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    r = runVtex({"inspect", vto.string(), "--json"});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    EXPECT_NE(r.out.find("\"filter\": \"neyret\""), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"per_level\""), std::string::npos);
+    EXPECT_NE(r.out.find("\"valid\": true"), std::string::npos);
+    EXPECT_NE(r.out.find("\"cyclic\": true"), std::string::npos);
+    EXPECT_EQ(lineCount(r.out), 1u);
+    r = runVtex({"inspect", vtl.string()});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    EXPECT_NE(r.out.find("fit error"), std::string::npos);
+    EXPECT_NE(r.out.find("VOXL"), std::string::npos);
+}
+
+TEST(SamplerCli, CorruptedFilesAreRefusedWithTheirSection) {
+    const auto glb = tmp("bush.glb"), vtl = tmp("bush.vtl"), vto = tmp("bush.vto");
+    ASSERT_EQ(runVtex({"pattern", "bush", "--leaves", "50", "-o", glb.string()}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"sample", glb.string(), "-o", vtl.string(), "-r", "16"}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"build", vtl.string(), "-o", vto.string()}).exitStatus, 0);
+    std::string bytes = readText(vto);
+    bytes[bytes.size() - 5] ^= 1;
+    const auto bad = tmp("bad.vto");
+    std::ofstream(bad, std::ios::binary) << bytes;
+    auto r = runVtex({"inspect", bad.string()});
+    EXPECT_EQ(r.exitStatus, 3);
+    EXPECT_NE(r.err.find("section 'LV04'"), std::string::npos) << r.err;
+    EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+    // A truncated .vtl given to build: exit 3, nothing written.
+    const std::string vtlBytes = readText(vtl);
+    const auto cut = tmp("cut.vtl");
+    std::ofstream(cut, std::ios::binary) << vtlBytes.substr(0, vtlBytes.size() / 2);
+    const auto out = tmp("never.vto");
+    r = runVtex({"build", cut.string(), "-o", out.string()});
+    EXPECT_EQ(r.exitStatus, 3);
+    EXPECT_NE(r.err.find("VOXL"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(SamplerCli, UsageErrorsAndMemoryLimit) {
+    const auto glb = tmp("fur.glb");
+    ASSERT_EQ(runVtex({"pattern", "fur", "--count", "20", "-o", glb.string()}).exitStatus, 0);
+    EXPECT_EQ(runVtex({"sample", glb.string(), "-o", tmp("x.vtl").string(), "-r", "100"}).exitStatus, 2);
+    EXPECT_EQ(runVtex({"build", "in.vtl", "-o", "x.vto", "--filter", "median"}).exitStatus, 2);
+    EXPECT_EQ(runVtex({"pattern", "lawn", "-o", "x.glb"}).exitStatus, 2);
+    const auto never = tmp("huge.vtl");
+    const auto r = runVtex({"sample", glb.string(), "-o", never.string(), "-r", "4096", "--max-memory", "64MiB"});
+    EXPECT_NE(r.exitStatus, 0);
+    EXPECT_EQ(r.signal, 0);
+    EXPECT_NE(r.err.find("max-memory"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(never));
+}
+
+}  // namespace
+}  // namespace vtex::test
