@@ -1,0 +1,44 @@
+/// @file
+/// @brief Rendered images and their files: linear OpenEXR (RGBA + optional AOVs), sRGB PNG.
+///
+/// DESIGN.md, "Rendering" and "Radiometry": EXR holds linear radiance, the PNG is sRGB-encoded
+/// and clamped. Every file is written through vtex::AtomicOutputFile.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <vector>
+
+namespace vtex::render {
+
+/// Row-major images, row 0 at the top.
+struct Image {
+    int width = 0;
+    int height = 0;
+    std::vector<float> rgba;   ///< 4 floats per pixel, linear RGB radiance and coverage alpha
+    std::vector<float> depth;  ///< AOV (optional): camera distance where the pixel turned opaque, 0 where nothing was hit
+    std::vector<float> level;  ///< AOV (optional): opacity-weighted mean octree level, −1 where no texel was seen
+
+    Image() = default;
+    Image(int w, int h, bool aovs);
+    std::size_t pixels() const { return std::size_t(width) * std::size_t(height); }
+    bool hasAovs() const { return !depth.empty(); }
+};
+
+/// Writes R, G, B, A (32-bit float, ZIP) and, when present, the AOV channels "Z" (depth) and
+/// "level". Throws vtex::IoError.
+void writeExr(const Image& image, const std::filesystem::path& file);
+/// Reads an EXR written by writeExr (or any RGBA EXR; missing channels read as 0, A as 1).
+/// Throws vtex::InputError.
+Image readExr(const std::filesystem::path& file);
+/// Writes an 8-bit sRGB PNG with alpha, colours clamped to [0,1]. Throws vtex::IoError.
+void writePng(const Image& image, const std::filesystem::path& file);
+
+/// Linear → sRGB transfer function on [0,1].
+double linearToSrgb(double linear);
+
+/// Mean of each 2×2 block (the box-downsampled image; width and height are halved, odd ones
+/// rounded down). AOVs are dropped.
+Image downsample2x(const Image& image);
+
+}  // namespace vtex::render

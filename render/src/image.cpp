@@ -1,0 +1,137 @@
+// EXR (OpenEXR 3, 32-bit float channels) and PNG (libpng's simplified API) files of an Image.
+#include <vtex/render/image.h>
+
+#include <vtex/core/atomic_file.h>
+#include <vtex/core/error.h>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace vtex::render {
+
+Image::Image(int w, int h, bool aovs) : width(w), height(h) {
+    rgba.assign(pixels() * 4, 0.0f);
+    if (aovs) {
+        depth.assign(pixels(), 0.0f);
+        level.assign(pixels(), -1.0f);
+    }
+}
+
+void writeExr(const Image& image, const std::filesystem::path& file) {
+    AtomicOutputFile out(file);
+    try {
+        Imf::Header header(image.width, image.height);
+        header.compression() = Imf::ZIP_COMPRESSION;
+        Imf::FrameBuffer frame;
+        const std::size_t pixelStride = 4 * sizeof(float);
+        const std::size_t rowStride = pixelStride * std::size_t(image.width);
+        const char* names[4] = {"R", "G", "B", "A"};
+        for (int c = 0; c < 4; ++c) {
+            header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+            frame.insert(names[c], Imf::Slice(Imf::FLOAT, (char*)(image.rgba.data() + c), pixelStride, rowStride));
+        }
+        if (image.hasAovs()) {
+            header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+            header.channels().insert("level", Imf::Channel(Imf::FLOAT));
+            frame.insert("Z", Imf::Slice(Imf::FLOAT, (char*)image.depth.data(), sizeof(float),
+                                         sizeof(float) * std::size_t(image.width)));
+            frame.insert("level", Imf::Slice(Imf::FLOAT, (char*)image.level.data(), sizeof(float),
+                                             sizeof(float) * std::size_t(image.width)));
+        }
+        Imf::OutputFile exr(out.temporaryPath().c_str(), header);
+        exr.setFrameBuffer(frame);
+        exr.writePixels(image.height);
+    } catch (const std::exception& e) {
+        throw IoError(file, std::string("cannot write EXR: ") + e.what());
+    }
+    out.commit();
+}
+
+Image readExr(const std::filesystem::path& file) {
+    try {
+        Imf::InputFile exr(file.c_str());
+        const Imath::Box2i window = exr.header().dataWindow();
+        const long w = long(window.max.x) - window.min.x + 1;
+        const long h = long(window.max.y) - window.min.y + 1;
+        if (w <= 0 || h <= 0 || w > 65536 || h > 65536 || w * h > (1L << 28))
+            throw InputError(file, "absurd EXR data window");
+        const bool aovs = exr.header().channels().findChannel("Z") != nullptr;
+        Image image(int(w), int(h), aovs);
+        Imf::FrameBuffer frame;
+        const std::size_t pixelStride = 4 * sizeof(float);
+        const std::size_t rowStride = pixelStride * std::size_t(w);
+        const std::ptrdiff_t origin = std::ptrdiff_t(window.min.x) + std::ptrdiff_t(window.min.y) * w;
+        const char* names[4] = {"R", "G", "B", "A"};
+        for (int c = 0; c < 4; ++c)
+            frame.insert(names[c], Imf::Slice(Imf::FLOAT, (char*)(image.rgba.data() + c - 4 * origin),
+                                              pixelStride, rowStride, 1, 1, c == 3 ? 1.0 : 0.0));
+        if (aovs) {
+            frame.insert("Z", Imf::Slice(Imf::FLOAT, (char*)(image.depth.data() - origin), sizeof(float),
+                                         sizeof(float) * std::size_t(w)));
+            frame.insert("level", Imf::Slice(Imf::FLOAT, (char*)(image.level.data() - origin), sizeof(float),
+                                             sizeof(float) * std::size_t(w), 1, 1, -1.0));
+        }
+        exr.setFrameBuffer(frame);
+        exr.readPixels(window.min.y, window.max.y);
+        return image;
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(file, std::string("cannot read EXR: ") + e.what());
+    }
+}
+
+double linearToSrgb(double x) {
+    x = std::clamp(x, 0.0, 1.0);
+    return x <= 0.0031308 ? 12.92 * x : 1.055 * std::pow(x, 1 / 2.4) - 0.055;
+}
+
+void writePng(const Image& image, const std::filesystem::path& file) {
+    std::vector<unsigned char> pixels(image.pixels() * 4);
+    for (std::size_t i = 0; i < image.pixels(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const double v = std::isfinite(image.rgba[4 * i + c]) ? image.rgba[4 * i + c] : 0.0;
+            pixels[4 * i + c] = (unsigned char)std::lround(255 * linearToSrgb(v));
+        }
+        const double a = std::clamp(double(image.rgba[4 * i + 3]), 0.0, 1.0);
+        pixels[4 * i + 3] = (unsigned char)std::lround(255 * (std::isfinite(a) ? a : 0.0));
+    }
+    png_image png;
+    std::memset(&png, 0, sizeof png);
+    png.version = PNG_IMAGE_VERSION;
+    png.width = png_uint_32(image.width);
+    png.height = png_uint_32(image.height);
+    png.format = PNG_FORMAT_RGBA;
+    png_alloc_size_t size = 0;
+    if (!png_image_write_to_memory(&png, nullptr, &size, 0, pixels.data(), 0, nullptr))
+        throw IoError(file, std::string("cannot encode PNG: ") + png.message);
+    std::string bytes(size, '\0');
+    if (!png_image_write_to_memory(&png, bytes.data(), &size, 0, pixels.data(), 0, nullptr))
+        throw IoError(file, std::string("cannot encode PNG: ") + png.message);
+    bytes.resize(size);
+    writeFileAtomically(file, bytes);
+}
+
+Image downsample2x(const Image& image) {
+    Image out(image.width / 2, image.height / 2, false);
+    for (int y = 0; y < out.height; ++y)
+        for (int x = 0; x < out.width; ++x)
+            for (int c = 0; c < 4; ++c) {
+                double sum = 0;
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx)
+                        sum += image.rgba[4 * (std::size_t(2 * y + dy) * std::size_t(image.width) + std::size_t(2 * x + dx)) + std::size_t(c)];
+                out.rgba[4 * (std::size_t(y) * std::size_t(out.width) + std::size_t(x)) + std::size_t(c)] = float(sum / 4);
+            }
+    return out;
+}
+
+}  // namespace vtex::render

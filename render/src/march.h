@@ -1,0 +1,94 @@
+// The block-skipping march through a sparse octree (see texel_march.h). Header-only so that the
+// renderer's per-voxel shading inlines into the loop.
+#pragma once
+
+#include <vtex/octree/octree.h>
+#include <vtex/render/shading.h>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace vtex::render::detail {
+
+struct Located {
+    const octree::OctreeNode* node;  ///< nullptr for empty space
+    int blockLevel;                  ///< the level at which the answer is uniform
+};
+
+/// The node that stands for voxel (x, y, z) of `level`, and the level of the uniform block
+/// around it (a leaf above, or the missing child that makes the block empty). See Octree::find.
+inline Located locate(const octree::Octree& tree, int level, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    const octree::OctreeNode* node = &tree.levels[0][0];
+    int l = 0;
+    while (l < level && !node->isLeaf()) {
+        const int shift = level - l - 1;
+        const unsigned c = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
+        if (!(node->childMask & (1u << c))) return {nullptr, l + 1};
+        const unsigned before = unsigned(std::popcount(unsigned(node->childMask) & ((1u << c) - 1u)));
+        node = &tree.levels[std::size_t(l + 1)][node->firstChild + before];
+        ++l;
+    }
+    if (node->data.isEmpty()) return {nullptr, l};
+    return {node, l};
+}
+
+/// Marches p0 + s·dir, s ∈ [0, length] (reference units, dir unit), at `level`, calling
+/// visit(node, s0, ds) for every non-empty block in front-to-back order; visit returns false to
+/// stop. Returns the number of blocks stepped through (empty ones included).
+template <class Visit>
+std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Vector3d& p0,
+                          const Eigen::Vector3d& dir, double length, Visit&& visit) {
+    if (tree.levels.empty() || tree.levels[0].empty() || !(length > 0)) return 0;
+    level = std::clamp(level, 0, int(tree.levels.size()) - 1);
+    const std::int64_t n = std::int64_t(1) << level;
+    const double invN = 1.0 / double(n);
+    // Every step looks the block up a little past its entry so that a point on a block face
+    // falls in the block ahead; 1e-7 of a voxel is far above double rounding at 2^20 voxels.
+    const double nudge = 1e-7 * invN;
+    const Eigen::Vector3d invDir(1 / dir.x(), 1 / dir.y(), 1 / dir.z());
+    // A line crosses at most (extent·n + 1) voxels per axis; the cap only guards against a
+    // pathological loop.
+    const double extent = std::abs(dir.x()) * length + std::abs(dir.y()) * length + std::abs(dir.z()) * length;
+    const std::uint64_t maxSteps = std::uint64_t(std::min(1e7, 3 * (extent + 3) * double(n) + 64));
+    std::uint64_t steps = 0;
+    double s = 0;
+    while (s < length && steps < maxSteps) {
+        ++steps;
+        const double sq = s + std::min(nudge, 0.5 * (length - s));
+        const Eigen::Vector3d p = p0 + sq * dir;
+        std::int64_t idx[3];
+        for (int a = 0; a < 3; ++a) {
+            const double f = std::floor(p[a] * double(n));
+            idx[a] = std::int64_t(std::clamp(f, -4e15, 4e15));
+        }
+        idx[2] = std::clamp<std::int64_t>(idx[2], 0, n - 1);
+        const std::uint32_t wx = std::uint32_t(((idx[0] % n) + n) % n);
+        const std::uint32_t wy = std::uint32_t(((idx[1] % n) + n) % n);
+        const Located found = locate(tree, level, wx, wy, std::uint32_t(idx[2]));
+        const std::int64_t size = std::int64_t(1) << (level - found.blockLevel);
+        const std::int64_t base[3] = {idx[0] - std::int64_t(wx % std::uint32_t(size)),
+                                      idx[1] - std::int64_t(wy % std::uint32_t(size)),
+                                      idx[2] - (idx[2] % size)};
+        double exit = length;
+        for (int a = 0; a < 3; ++a) {
+            if (dir[a] > 0) exit = std::min(exit, (double(base[a] + size) * invN - p0[a]) * invDir[a]);
+            else if (dir[a] < 0) exit = std::min(exit, (double(base[a]) * invN - p0[a]) * invDir[a]);
+        }
+        if (!(exit > s)) exit = std::min(length, sq);  // rounding: never stand still
+        if (found.node && !visit(*found.node, s, exit - s)) return steps;
+        s = exit;
+    }
+    return steps;
+}
+
+/// Â(ω) = √(ωᵀSω) for a node's normalised S.
+inline double normalizedArea(const SggxMatrix& s, const Eigen::Vector3d& w) {
+    return std::sqrt(std::max(s.quadratic(w), 0.0));
+}
+
+}  // namespace vtex::render::detail

@@ -1,0 +1,288 @@
+// scene.toml → Scene (DESIGN.md, "Scene file"), with toml++. Every value is checked for type and
+// range; the error names the file and the key path (e.g. "surface[1].material.diffuse").
+#include <vtex/render/scene.h>
+
+#include <vtex/core/error.h>
+
+#include <Eigen/Geometry>
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace vtex::render {
+namespace {
+
+namespace fs = std::filesystem;
+
+class Reader {
+public:
+    Reader(const fs::path& file, std::vector<std::string>& warnings) : mFile(file), mWarnings(warnings) {}
+
+    [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
+        throw InputError(mFile, problem, key);
+    }
+
+    // Warns about keys of `table` that are not in `known`.
+    void checkKeys(const toml::table& table, const std::string& path,
+                   std::initializer_list<std::string_view> known) {
+        for (const auto& [key, value] : table) {
+            bool found = false;
+            for (auto k : known) found = found || key.str() == k;
+            if (!found) {
+                const std::string full = path.empty() ? std::string(key.str()) : path + "." + std::string(key.str());
+                mWarnings.push_back(mFile.string() + ": unknown key '" + full + "' ignored");
+            }
+        }
+    }
+
+    double number(const toml::node& node, const std::string& key) const {
+        if (auto v = node.as_floating_point()) {
+            const double x = v->get();
+            if (!std::isfinite(x)) fail(key, "must be a finite number");
+            return x;
+        }
+        if (auto v = node.as_integer()) return double(v->get());
+        fail(key, "must be a number");
+    }
+
+    double number(const toml::table& table, const std::string& path, std::string_view name,
+                  std::optional<double> fallback, double min, double max, bool openMin = false) const {
+        const std::string key = join(path, name);
+        const toml::node* node = table.get(name);
+        if (!node) {
+            if (!fallback) fail(key, "missing key");
+            return *fallback;
+        }
+        const double x = number(*node, key);
+        if (x < min || x > max || (openMin && x == min)) {
+            std::ostringstream s;
+            s << "must be " << (openMin ? "in (" : "in [") << min << ", " << max << "], got " << x;
+            fail(key, s.str());
+        }
+        return x;
+    }
+
+    int integer(const toml::table& table, const std::string& path, std::string_view name,
+                std::optional<int> fallback, int min, int max) const {
+        const std::string key = join(path, name);
+        const toml::node* node = table.get(name);
+        if (!node) {
+            if (!fallback) fail(key, "missing key");
+            return *fallback;
+        }
+        const auto v = node->as_integer();
+        if (!v) fail(key, "must be an integer");
+        if (v->get() < min || v->get() > max)
+            fail(key, "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+        return int(v->get());
+    }
+
+    template <int N>
+    Eigen::Matrix<double, N, 1> vector(const toml::table& table, const std::string& path, std::string_view name,
+                                       std::optional<Eigen::Matrix<double, N, 1>> fallback,
+                                       double min = -INFINITY) const {
+        const std::string key = join(path, name);
+        const toml::node* node = table.get(name);
+        if (!node) {
+            if (!fallback) fail(key, "missing key");
+            return *fallback;
+        }
+        const auto array = node->as_array();
+        if (!array || array->size() != std::size_t(N))
+            fail(key, "must be an array of " + std::to_string(N) + " numbers");
+        Eigen::Matrix<double, N, 1> out;
+        for (int i = 0; i < N; ++i) {
+            out[i] = number(*array->get(std::size_t(i)), key);
+            if (out[i] < min) fail(key, "components must be ≥ " + std::to_string(min));
+        }
+        return out;
+    }
+
+    std::string string(const toml::table& table, const std::string& path, std::string_view name,
+                       std::optional<std::string> fallback) const {
+        const std::string key = join(path, name);
+        const toml::node* node = table.get(name);
+        if (!node) {
+            if (!fallback) fail(key, "missing key");
+            return *fallback;
+        }
+        const auto v = node->as_string();
+        if (!v) fail(key, "must be a string");
+        return v->get();
+    }
+
+    const toml::table* subtable(const toml::table& table, const std::string& path, std::string_view name,
+                                bool required) const {
+        const toml::node* node = table.get(name);
+        if (!node) {
+            if (required) fail(join(path, name), "missing table");
+            return nullptr;
+        }
+        const auto t = node->as_table();
+        if (!t) fail(join(path, name), "must be a table");
+        return t;
+    }
+
+    std::vector<const toml::table*> arrayOfTables(const toml::table& table, std::string_view name) const {
+        std::vector<const toml::table*> out;
+        const toml::node* node = table.get(name);
+        if (!node) return out;
+        const auto array = node->as_array();
+        if (!array) fail(std::string(name), "must be an array of tables ([[" + std::string(name) + "]])");
+        for (std::size_t i = 0; i < array->size(); ++i) {
+            const auto t = array->get(i)->as_table();
+            if (!t) fail(std::string(name) + "[" + std::to_string(i) + "]", "must be a table");
+            out.push_back(t);
+        }
+        return out;
+    }
+
+    Material material(const toml::table& parent, const std::string& path, const Material& defaults) {
+        const toml::table* t = subtable(parent, path, "material", false);
+        if (!t) return defaults;
+        const std::string p = join(path, "material");
+        checkKeys(*t, p, {"ambient", "diffuse", "specular", "shininess"});
+        Material m;
+        m.ambient = vector<3>(*t, p, "ambient", defaults.ambient, 0.0);
+        m.diffuse = vector<3>(*t, p, "diffuse", defaults.diffuse, 0.0);
+        m.specular = vector<3>(*t, p, "specular", defaults.specular, 0.0);
+        m.shininess = number(*t, p, "shininess", defaults.shininess, 0, 1e6);
+        return m;
+    }
+
+    fs::path resolve(const std::string& relative) const {
+        const fs::path p(relative);
+        if (p.is_absolute()) return p;
+        return mFile.parent_path() / p;
+    }
+
+    static std::string join(const std::string& path, std::string_view name) {
+        return path.empty() ? std::string(name) : path + "." + std::string(name);
+    }
+
+private:
+    fs::path mFile;
+    std::vector<std::string>& mWarnings;
+};
+
+}  // namespace
+
+Scene parseScene(std::string_view text, const std::filesystem::path& file) {
+    Scene scene;
+    scene.file = file;
+    toml::table root;
+    try {
+        root = toml::parse(text, file.string());
+    } catch (const toml::parse_error& e) {
+        std::ostringstream where;
+        where << "line " << e.source().begin.line << ", column " << e.source().begin.column;
+        throw InputError(file, "TOML syntax error: " + std::string(e.description()), where.str());
+    }
+    Reader r(file, scene.warnings);
+    r.checkKeys(root, "", {"camera", "light", "texel", "surface"});
+
+    // Camera.
+    const toml::table& cam = *r.subtable(root, "", "camera", true);
+    r.checkKeys(cam, "camera", {"position", "look_at", "up", "fov_y", "width", "height"});
+    Camera& c = scene.camera;
+    c.position = r.vector<3>(cam, "camera", "position", std::nullopt);
+    c.lookAt = r.vector<3>(cam, "camera", "look_at", std::nullopt);
+    c.up = r.vector<3>(cam, "camera", "up", Eigen::Vector3d(0, 0, 1));
+    c.fovY = r.number(cam, "camera", "fov_y", 40.0, 0, 179, true);
+    c.width = r.integer(cam, "camera", "width", 768, 1, 16384);
+    c.height = r.integer(cam, "camera", "height", 576, 1, 16384);
+    const Eigen::Vector3d forward = c.lookAt - c.position;
+    if (!(forward.norm() > 0)) r.fail("camera.look_at", "must differ from camera.position");
+    if (!(forward.normalized().cross(c.up).norm() > 1e-9 * c.up.norm()) || !(c.up.norm() > 0))
+        r.fail("camera.up", "must not be zero or parallel to the viewing direction");
+
+    // Lights.
+    const auto lights = r.arrayOfTables(root, "light");
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+        const toml::table& t = *lights[i];
+        const std::string p = "light[" + std::to_string(i) + "]";
+        r.checkKeys(t, p, {"type", "direction", "position", "color"});
+        Light light;
+        const std::string type = r.string(t, p, "type", std::nullopt);
+        light.color = r.vector<3>(t, p, "color", Color(1, 1, 1), 0.0);
+        if (type == "directional") {
+            light.type = LightType::Directional;
+            const Eigen::Vector3d d = r.vector<3>(t, p, "direction", std::nullopt);
+            if (!(d.norm() > 0)) r.fail(p + ".direction", "must not be zero");
+            light.direction = d.normalized();
+        } else if (type == "point") {
+            light.type = LightType::Point;
+            light.position = r.vector<3>(t, p, "position", std::nullopt);
+        } else {
+            r.fail(p + ".type", "must be \"directional\" or \"point\", got \"" + type + "\"");
+        }
+        scene.lights.push_back(light);
+    }
+
+    // Texels.
+    const auto texels = r.arrayOfTables(root, "texel");
+    std::set<std::string> names;
+    for (std::size_t i = 0; i < texels.size(); ++i) {
+        const toml::table& t = *texels[i];
+        const std::string p = "texel[" + std::to_string(i) + "]";
+        r.checkKeys(t, p, {"name", "volume", "source", "tau", "material"});
+        TexelDef texel;
+        texel.name = r.string(t, p, "name", std::nullopt);
+        if (!names.insert(texel.name).second) r.fail(p + ".name", "duplicate texel name '" + texel.name + "'");
+        texel.volume = r.resolve(r.string(t, p, "volume", std::nullopt));
+        const std::string source = r.string(t, p, "source", std::string());
+        if (!source.empty()) texel.source = r.resolve(source);
+        texel.tau = r.number(t, p, "tau", 1.0, 0, 1e12);
+        texel.material = r.material(t, p, texel.material);
+        scene.texels.push_back(std::move(texel));
+    }
+
+    // Surfaces.
+    const auto surfaces = r.arrayOfTables(root, "surface");
+    for (std::size_t i = 0; i < surfaces.size(); ++i) {
+        const toml::table& t = *surfaces[i];
+        const std::string p = "surface[" + std::to_string(i) + "]";
+        r.checkKeys(t, p, {"mesh", "texel", "height", "placement", "repeat", "material"});
+        SurfaceDef s;
+        s.mesh = r.resolve(r.string(t, p, "mesh", std::nullopt));
+        if (t.get("texel")) {
+            const std::string name = r.string(t, p, "texel", std::nullopt);
+            for (std::size_t k = 0; k < scene.texels.size(); ++k)
+                if (scene.texels[k].name == name) s.texel = k;
+            if (!s.texel) r.fail(p + ".texel", "no [[texel]] is named '" + name + "'");
+        }
+        s.height = r.number(t, p, "height", 0.1, 0, 1e30, true);
+        const std::string placement = r.string(t, p, "placement", std::string("on"));
+        if (placement == "on") s.placement = Placement::On;
+        else if (placement == "under") s.placement = Placement::Under;
+        else r.fail(p + ".placement", "must be \"on\" or \"under\", got \"" + placement + "\"");
+        const Eigen::Vector2d repeat = r.vector<2>(t, p, "repeat", Eigen::Vector2d(1, 1));
+        for (int k = 0; k < 2; ++k)
+            if (!(repeat[k] > 0 && repeat[k] <= 1e6)) r.fail(p + ".repeat", "components must be in (0, 1e6]");
+        s.repeat = {repeat[0], repeat[1]};
+        s.material = r.material(t, p, Material{});
+        if (!s.texel && (t.get("height") || t.get("placement") || t.get("repeat")))
+            scene.warnings.push_back(file.string() + ": " + p +
+                                     ": height/placement/repeat ignored on a surface without a texel");
+        scene.surfaces.push_back(std::move(s));
+    }
+    return scene;
+}
+
+Scene loadScene(const std::filesystem::path& file) {
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) throw InputError(file, "no such scene file");
+    const auto size = fs::file_size(file, ec);
+    if (ec) throw IoError(file, "cannot read: " + ec.message());
+    if (size > (std::uintmax_t(64) << 20)) throw InputError(file, "scene file larger than 64 MiB");
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw IoError(file, "cannot open");
+    std::ostringstream text;
+    text << in.rdbuf();
+    return parseScene(text.str(), file);
+}
+
+}  // namespace vtex::render

@@ -1,0 +1,103 @@
+// Micro-primitive reflectance (see shading.h). The fast path evaluates the SGGX visible-normal
+// distribution with the closed-form sampler of Heitz et al. 2015 (Listing 3) on a fixed lattice.
+#include <vtex/render/shading.h>
+
+#include <vtex/octree/voxel.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace vtex::render {
+
+using Eigen::Vector3d;
+
+octree::ReflectanceFactors reflectanceReference(const SggxMatrix& s, const Vector3d& light,
+                                                const Vector3d& view, double shininess, int samplesPerAxis) {
+    octree::Mat3 m;
+    m << s.xx, s.xy, s.xz, s.xy, s.yy, s.yz, s.xz, s.yz, s.zz;
+    const auto ellipsoid = octree::Ellipsoid::fromS(m);
+    if (!ellipsoid) return {};
+    return octree::phongReflectanceApparentEllipse(*ellipsoid, light, view, shininess, samplesPerAxis);
+}
+
+SggxMatrix voxelS(const octree::VoxelData& voxel) {
+    // Rotation matrix of the unit quaternion (x, y, z, w), then S = R diag(σ²) Rᵀ.
+    const double x = voxel.rotation[0], y = voxel.rotation[1], z = voxel.rotation[2], w = voxel.rotation[3];
+    const double r[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                            {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                            {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
+    const double s2[3] = {double(voxel.sigma[0]) * voxel.sigma[0], double(voxel.sigma[1]) * voxel.sigma[1],
+                          double(voxel.sigma[2]) * voxel.sigma[2]};
+    const auto entry = [&](int i, int j) { return r[i][0] * s2[0] * r[j][0] + r[i][1] * s2[1] * r[j][1] + r[i][2] * s2[2] * r[j][2]; };
+    return {entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2)};
+}
+
+namespace {
+
+// Fixed points on the unit disc: a Fibonacci lattice, radius √((i+½)/n) for equal areas.
+struct DiscLattice {
+    std::array<double, 64> x{}, y{};
+    int n = 0;
+    explicit DiscLattice(int count) : n(count) {
+        const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
+        for (int i = 0; i < n; ++i) {
+            const double r = std::sqrt((i + 0.5) / n);
+            x[std::size_t(i)] = r * std::cos(golden * i);
+            y[std::size_t(i)] = r * std::sin(golden * i);
+        }
+    }
+};
+
+const DiscLattice& lattice(int samples) {
+    static const DiscLattice l8(8), l16(16), l32(32), l64(64);
+    return samples <= 8 ? l8 : samples <= 16 ? l16 : samples <= 32 ? l32 : l64;
+}
+
+}  // namespace
+
+octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light,
+                                           const Vector3d& view, double shininess, int samples) {
+    // Orthonormal basis (wk, wj, wi) with wi = view (Frisvad/Duff's branchless construction).
+    const Vector3d wi = view;
+    const double sign = std::copysign(1.0, wi.z());
+    const double a = -1.0 / (sign + wi.z());
+    const double b = wi.x() * wi.y() * a;
+    const Vector3d wk(1 + sign * wi.x() * wi.x() * a, sign * b, -sign * wi.x());
+    const Vector3d wj(b, sign + wi.y() * wi.y() * a, -wi.y());
+    const auto quad = [&](const Vector3d& p, const Vector3d& q) { return s.bilinear(p, q); };
+    const double Skk = quad(wk, wk), Sjj = quad(wj, wj), Sii = quad(wi, wi);
+    const double Skj = quad(wk, wj), Ski = quad(wk, wi), Sji = quad(wj, wi);
+    if (!(Sii > 0)) return {};
+    const double det = Skk * Sjj * Sii - Skj * Skj * Sii - Ski * Ski * Sjj - Sji * Sji * Skk + 2 * Skj * Ski * Sji;
+    const double sqrtDet = std::sqrt(std::abs(det));
+    const double invSqrtSii = 1 / std::sqrt(Sii);
+    // tmp² is the determinant of the (j,i) block; S is floored away from singular by the
+    // ellipsoid's axis-ratio floor, but float storage can round it to 0: keep it positive.
+    const double tmp = std::sqrt(std::max(Sjj * Sii - Sji * Sji, 1e-30 * Sii * Sii));
+    const Vector3d Mk(sqrtDet / tmp, 0, 0);
+    const Vector3d Mj(-invSqrtSii * (Ski * Sji - Skj * Sii) / tmp, invSqrtSii * tmp, 0);
+    const Vector3d Mi(invSqrtSii * Ski, invSqrtSii * Sji, invSqrtSii * Sii);
+    const Vector3d l(light.dot(wk), light.dot(wj), light.dot(wi));
+    const double lv = l.z();
+
+    const DiscLattice& points = lattice(samples);
+    double diffuse = 0, specular = 0;
+    const double specularNorm = (shininess + 2) / (2 * std::numbers::pi);
+    for (int n = 0; n < points.n; ++n) {
+        const double u = points.x[std::size_t(n)], v = points.y[std::size_t(n)];
+        const double w = std::sqrt(std::max(0.0, 1 - u * u - v * v));
+        Vector3d m = u * Mk + v * Mj + w * Mi;
+        const double len = m.norm();
+        if (!(len > 0)) continue;
+        m /= len;
+        const double nl = m.dot(l);
+        if (nl <= 0) continue;  // facet in its own shadow
+        diffuse += nl;
+        // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
+        const double cosAlpha = 2 * nl * m.z() - lv;
+        if (cosAlpha > 0) specular += nl * std::pow(cosAlpha, shininess);
+    }
+    return {diffuse / (points.n * std::numbers::pi), specular * specularNorm / points.n};
+}
+
+}  // namespace vtex::render

@@ -1,0 +1,170 @@
+// Embree 3 user geometry over bilinear patches and trilinear cells (see tracer.h).
+//
+// Embree traverses its float BVH with the float copy of the ray; the primitive tests run in
+// double precision on the caller's double ray, which travels in an extended intersect context
+// (the documented Embree 3 way to pass per-ray data to user geometry callbacks).
+#include "tracer.h"
+
+#include <vtex/core/error.h>
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace vtex::render::detail {
+namespace {
+
+struct TraceContext {
+    RTCIntersectContext context;  // first member: Embree hands back a pointer to it
+    const std::vector<Prim>* prims;
+    Vec3 o, d;
+    double tNear;
+    double tBest;
+    Hit best;
+};
+
+void boundsFunction(const RTCBoundsFunctionArguments* args) {
+    const auto& prims = *static_cast<const std::vector<Prim>*>(args->geometryUserPtr);
+    const Prim& prim = prims[args->primID];
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    // A bilinear patch lies in the convex hull of its corners, a trilinear cell in that of its
+    // eight corners.
+    if (prim.textured) {
+        for (const Vec3& c : prim.cell.corners()) {
+            lo = lo.cwiseMin(c);
+            hi = hi.cwiseMax(c);
+        }
+    } else {
+        for (const Vec3& c : prim.p) {
+            lo = lo.cwiseMin(c);
+            hi = hi.cwiseMax(c);
+        }
+    }
+    // Pad for the float rounding of the box and of the ray Embree traverses with.
+    const double pad = 1e-6 * (lo.cwiseAbs().maxCoeff() + hi.cwiseAbs().maxCoeff() + (hi - lo).maxCoeff()) + 1e-30;
+    RTCBounds* b = args->bounds_o;
+    b->lower_x = std::nextafter(float(lo.x() - pad), -INFINITY);
+    b->lower_y = std::nextafter(float(lo.y() - pad), -INFINITY);
+    b->lower_z = std::nextafter(float(lo.z() - pad), -INFINITY);
+    b->upper_x = std::nextafter(float(hi.x() + pad), INFINITY);
+    b->upper_y = std::nextafter(float(hi.y() + pad), INFINITY);
+    b->upper_z = std::nextafter(float(hi.z() + pad), INFINITY);
+}
+
+void intersectFunction(const RTCIntersectFunctionNArguments* args) {
+    if (!args->valid[0]) return;
+    auto* ctx = reinterpret_cast<TraceContext*>(args->context);
+    const Prim& prim = (*ctx->prims)[args->primID];
+    auto* rayhit = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N = 1: rtcIntersect1 only
+    Hit hit;
+    hit.prim = int(args->primID);
+    if (!prim.textured) {
+        const auto h = intersectBilinearPatch(ctx->o, ctx->d, prim.p[0], prim.p[1], prim.p[2], prim.p[3],
+                                              ctx->tNear, ctx->tBest);
+        if (!h) return;
+        hit.t = h->t;
+        hit.u = h->u;
+        hit.v = h->v;
+    } else {
+        std::array<CellSpan, 4> spans;
+        const int count = cellSpans(prim.cell, ctx->o, ctx->d, spans);
+        int chosen = -1;
+        for (int i = 0; i < count; ++i) {
+            if (spans[std::size_t(i)].tOut > ctx->tNear) {
+                chosen = i;
+                break;
+            }
+        }
+        if (chosen < 0) return;
+        hit.span = spans[std::size_t(chosen)];
+        hit.t = std::max(hit.span.tIn, ctx->tNear);
+        if (!(hit.t < ctx->tBest)) return;
+    }
+    ctx->tBest = hit.t;
+    ctx->best = hit;
+    rayhit->ray.tfar = std::nextafter(float(hit.t), INFINITY);
+    rayhit->hit.u = 0;
+    rayhit->hit.v = 0;
+    rayhit->hit.Ng_x = 0;
+    rayhit->hit.Ng_y = 0;
+    rayhit->hit.Ng_z = 1;
+    rayhit->hit.primID = args->primID;
+    rayhit->hit.geomID = args->geomID;
+    rayhit->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+void errorFunction(void*, RTCError code, const char* message) {
+    (void)code;
+    (void)message;  // reported by rtcGetDeviceError where it matters
+}
+
+}  // namespace
+
+Tracer::Tracer(std::vector<Prim> prims) : mPrims(std::move(prims)) {
+    RTCDevice device = rtcNewDevice(nullptr);
+    if (!device) throw std::runtime_error("Embree: cannot create a device");
+    rtcSetDeviceErrorFunction(device, errorFunction, nullptr);
+    RTCScene scene = rtcNewScene(device);
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+    if (!mPrims.empty()) {
+        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(geometry, unsigned(mPrims.size()));
+        rtcSetGeometryUserData(geometry, &mPrims);
+        rtcSetGeometryBoundsFunction(geometry, boundsFunction, &mPrims);
+        rtcSetGeometryIntersectFunction(geometry, intersectFunction);
+        rtcCommitGeometry(geometry);
+        rtcAttachGeometry(scene, geometry);
+        rtcReleaseGeometry(geometry);
+    }
+    rtcCommitScene(scene);
+    if (rtcGetDeviceError(device) != RTC_ERROR_NONE) {
+        rtcReleaseScene(scene);
+        rtcReleaseDevice(device);
+        throw std::runtime_error("Embree: cannot build the scene");
+    }
+    mDevice = device;
+    mScene = scene;
+}
+
+Tracer::~Tracer() {
+    rtcReleaseScene(static_cast<RTCScene>(mScene));
+    rtcReleaseDevice(static_cast<RTCDevice>(mDevice));
+}
+
+std::optional<Hit> Tracer::trace(const Vec3& o, const Vec3& d, double tNear, double tFar) const {
+    if (mPrims.empty()) return std::nullopt;
+    TraceContext ctx;
+    rtcInitIntersectContext(&ctx.context);
+    ctx.prims = &mPrims;
+    ctx.o = o;
+    ctx.d = d;
+    ctx.tNear = tNear;
+    ctx.tBest = tFar;
+    RTCRayHit rayhit;
+    rayhit.ray.org_x = float(o.x());
+    rayhit.ray.org_y = float(o.y());
+    rayhit.ray.org_z = float(o.z());
+    rayhit.ray.dir_x = float(d.x());
+    rayhit.ray.dir_y = float(d.y());
+    rayhit.ray.dir_z = float(d.z());
+    // Embree culls boxes with the float interval: open it a little so that the double tests
+    // decide, not the float rounding of tNear and of the origin.
+    rayhit.ray.tnear = float(std::max(0.0, tNear * (1 - 1e-5) - 1e-6 * std::abs(tNear)));
+    rayhit.ray.tfar = std::isfinite(tFar) ? std::nextafter(float(tFar), INFINITY) : INFINITY;
+    rayhit.ray.mask = 0xFFFFFFFFu;
+    rayhit.ray.time = 0;
+    rayhit.ray.flags = 0;
+    rayhit.ray.id = 0;
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(static_cast<RTCScene>(mScene), &ctx.context, &rayhit);
+    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID || ctx.best.prim < 0) return std::nullopt;
+    return ctx.best;
+}
+
+}  // namespace vtex::render::detail

@@ -1,0 +1,50 @@
+// The base faces and texel cells as one Embree 3 user geometry (exact bilinear-patch tests in
+// double precision behind Embree's float BVH). Embree types stay in tracer.cpp.
+#pragma once
+
+#include <vtex/render/geometry.h>
+
+#include <array>
+#include <limits>
+#include <optional>
+#include <vector>
+
+namespace vtex::render::detail {
+
+struct Prim {
+    int surface = 0;
+    int face = 0;
+    bool textured = false;
+    std::array<Vec3, 4> p;  ///< corners p00, p10, p01, p11 (world)
+    std::array<Vec3, 4> n;  ///< unit shading normals at the corners
+    TrilinearCell cell;     ///< textured faces only
+};
+
+struct Hit {
+    int prim = -1;
+    double t = 0;        ///< where the ray enters the primitive (≥ tNear)
+    double u = 0, v = 0; ///< plain patch parameters
+    CellSpan span;       ///< cells: the span entered (tIn may be < tNear when the ray starts inside)
+};
+
+class Tracer {
+public:
+    explicit Tracer(std::vector<Prim> prims);
+    ~Tracer();
+    Tracer(const Tracer&) = delete;
+    Tracer& operator=(const Tracer&) = delete;
+
+    /// The nearest primitive along o + t·d with t > tNear (a cell also when the ray is inside
+    /// it at tNear, with its span clipped to start there), t < tFar.
+    std::optional<Hit> trace(const Vec3& o, const Vec3& d, double tNear,
+                             double tFar = std::numeric_limits<double>::infinity()) const;
+
+    const std::vector<Prim>& prims() const { return mPrims; }
+
+private:
+    std::vector<Prim> mPrims;
+    void* mDevice = nullptr;
+    void* mScene = nullptr;
+};
+
+}  // namespace vtex::render::detail
