@@ -55,8 +55,9 @@ struct Corner {
 };
 struct CornerHash {
     std::size_t operator()(const Corner& c) const {
-        return std::size_t(c.v * 0x9E3779B97F4A7C15LL) ^ std::size_t(c.vt * 0xC2B2AE3D27D4EB4FLL) ^
-               std::size_t(c.vn * 0x165667B19E3779F9LL);
+        // Unsigned arithmetic: wrapping is defined (found by the fuzzer as a signed overflow).
+        return std::size_t(std::uint64_t(c.v) * 0x9E3779B97F4A7C15ULL) ^ std::size_t(std::uint64_t(c.vt) * 0xC2B2AE3D27D4EB4FULL) ^
+               std::size_t(std::uint64_t(c.vn) * 0x165667B19E3779F9ULL);
     }
 };
 

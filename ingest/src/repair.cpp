@@ -24,7 +24,8 @@ struct Cell {
 };
 struct CellHash {
     std::size_t operator()(const Cell& c) const {
-        return std::size_t(c.x * 73856093LL) ^ std::size_t(c.y * 19349663LL) ^ std::size_t(c.z * 83492791LL);
+        return std::size_t(std::uint64_t(c.x) * 73856093ULL) ^ std::size_t(std::uint64_t(c.y) * 19349663ULL) ^
+               std::size_t(std::uint64_t(c.z) * 83492791ULL);
     }
 };
 

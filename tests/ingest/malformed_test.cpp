@@ -242,6 +242,20 @@ TEST(Malformed, HeaderCountsBeyondTheBytes) {
     expectRefused("truncated.stl", stl + std::string(50, '\0'), "binary STL");
 }
 
+// Regressions found by the fuzzer (fuzz/fuzz_ingest.cpp), named after the bug.
+TEST(Malformed, FuzzObjHugeIndexHashOverflow) {
+    // A huge negative-relative index made the corner hash overflow a signed multiply (UBSan).
+    expectRefused("fuzz_hash.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 1609587929392839161\n", "out of range");
+}
+
+TEST(Malformed, FuzzStlTextThatIsNotSolidHangs) {
+    // Text that is not "solid ..." went to OpenMesh's binary reader, which then looped over a
+    // triangle count read from the text.
+    expectRefused("fuzz_hang.stl",
+                  "soli\xff" "d test\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0 0\n" + std::string(200, ' '),
+                  "neither an ASCII STL");
+}
+
 TEST(Malformed, MaxTriangles) {
     ingest::IngestOptions options;
     options.maxTriangles = 1;
