@@ -1,0 +1,40 @@
+/// @file
+/// @brief Error metrics between two images (DESIGN.md, "Reporting error against run time").
+///
+/// RMSE on linear RGB (alpha and AOVs are not compared), PSNR with a peak of 1 (the linear value
+/// the PNG preview shows as white), SSIM (Wang, Bovik, Sheikh and Simoncelli 2004) on linear
+/// luminance with an 11×11 Gaussian window of σ = 1.5, K₁ = 0.01, K₂ = 0.03 and dynamic range 1,
+/// the window truncated and renormalised at the borders so every pixel counts.
+#pragma once
+
+#include <vtex/render/image.h>
+
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace vtex::render {
+
+struct ImageComparison {
+    int width = 0;
+    int height = 0;
+    double rmse = 0;                                            ///< √(mean over pixels and R,G,B of Δ²)
+    double psnr = std::numeric_limits<double>::infinity();      ///< dB, 10·log₁₀(1/MSE); ∞ when identical
+    double ssim = 1;                                            ///< mean SSIM of the luminance
+    int worstX = 0, worstY = 0;                                 ///< the pixel of largest RGB error
+    double worstError = 0;                                      ///< its RMS over R, G, B
+};
+
+/// Compares two images of equal size. Throws std::invalid_argument when the sizes differ.
+ImageComparison compareImages(const Image& a, const Image& b);
+
+/// Per-pixel RMS error over R, G, B mapped to a black–red–yellow–white ramp, full scale at
+/// `fullScale` (> 0; pass the worst error for a self-scaled map). Equal sizes required.
+Image errorHeatMap(const Image& a, const Image& b, double fullScale);
+
+/// The colour channels of an EXR file that take part in a comparison (its channel names less
+/// the AOVs "Z" and "level"), sorted. Throws vtex::InputError when the file cannot be read.
+std::vector<std::string> comparedChannels(const std::filesystem::path& exrFile);
+
+}  // namespace vtex::render

@@ -1,0 +1,142 @@
+#include <vtex/render/compare.h>
+
+#include <vtex/core/error.h>
+
+#include <ImfChannelList.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+
+namespace vtex::render {
+namespace {
+
+void requireSameSize(const Image& a, const Image& b) {
+    if (a.width != b.width || a.height != b.height)
+        throw std::invalid_argument("sizes differ: " + std::to_string(a.width) + "×" + std::to_string(a.height) +
+                                    " and " + std::to_string(b.width) + "×" + std::to_string(b.height));
+}
+
+double pixelSquaredError(const Image& a, const Image& b, std::size_t pixel) {
+    double sum = 0;
+    for (int c = 0; c < 3; ++c) {
+        const double d = double(a.rgba[4 * pixel + c]) - double(b.rgba[4 * pixel + c]);
+        sum += d * d;
+    }
+    return sum;
+}
+
+std::vector<double> luminance(const Image& image) {
+    std::vector<double> y(image.pixels());
+    for (std::size_t p = 0; p < y.size(); ++p)
+        y[p] = 0.2126 * image.rgba[4 * p] + 0.7152 * image.rgba[4 * p + 1] + 0.0722 * image.rgba[4 * p + 2];
+    return y;
+}
+
+// Gaussian-weighted local mean of `values`, separable, truncated and renormalised at borders.
+std::vector<double> gaussianMean(const std::vector<double>& values, int width, int height) {
+    constexpr int kRadius = 5;
+    std::array<double, 2 * kRadius + 1> kernel{};
+    for (int i = -kRadius; i <= kRadius; ++i) kernel[std::size_t(i + kRadius)] = std::exp(-0.5 * i * i / (1.5 * 1.5));
+    auto pass = [&](const std::vector<double>& in, bool horizontal) {
+        std::vector<double> out(in.size());
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                double sum = 0, weight = 0;
+                for (int i = -kRadius; i <= kRadius; ++i) {
+                    const int sx = horizontal ? x + i : x, sy = horizontal ? y : y + i;
+                    if (sx < 0 || sy < 0 || sx >= width || sy >= height) continue;
+                    const double w = kernel[std::size_t(i + kRadius)];
+                    sum += w * in[std::size_t(sy) * std::size_t(width) + std::size_t(sx)];
+                    weight += w;
+                }
+                out[std::size_t(y) * std::size_t(width) + std::size_t(x)] = sum / weight;
+            }
+        return out;
+    };
+    return pass(pass(values, true), false);
+}
+
+double meanSsim(const Image& a, const Image& b) {
+    const std::vector<double> x = luminance(a), y = luminance(b);
+    std::vector<double> xx(x.size()), yy(x.size()), xy(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        xx[i] = x[i] * x[i];
+        yy[i] = y[i] * y[i];
+        xy[i] = x[i] * y[i];
+    }
+    const int w = a.width, h = a.height;
+    const auto mx = gaussianMean(x, w, h), my = gaussianMean(y, w, h);
+    const auto mxx = gaussianMean(xx, w, h), myy = gaussianMean(yy, w, h), mxy = gaussianMean(xy, w, h);
+    constexpr double kC1 = 0.01 * 0.01, kC2 = 0.03 * 0.03;  // (K·L)² with L = 1
+    double sum = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        const double varX = std::max(0.0, mxx[i] - mx[i] * mx[i]);
+        const double varY = std::max(0.0, myy[i] - my[i] * my[i]);
+        const double cov = mxy[i] - mx[i] * my[i];
+        sum += (2 * mx[i] * my[i] + kC1) * (2 * cov + kC2) /
+               ((mx[i] * mx[i] + my[i] * my[i] + kC1) * (varX + varY + kC2));
+    }
+    return sum / double(x.size());
+}
+
+}  // namespace
+
+ImageComparison compareImages(const Image& a, const Image& b) {
+    requireSameSize(a, b);
+    ImageComparison result;
+    result.width = a.width;
+    result.height = a.height;
+    if (a.pixels() == 0) return result;
+    double total = 0;
+    for (std::size_t p = 0; p < a.pixels(); ++p) {
+        const double squared = pixelSquaredError(a, b, p);
+        total += squared;
+        const double rms = std::sqrt(squared / 3);
+        if (rms > result.worstError) {
+            result.worstError = rms;
+            result.worstX = int(p % std::size_t(a.width));
+            result.worstY = int(p / std::size_t(a.width));
+        }
+    }
+    const double mse = total / (3.0 * double(a.pixels()));
+    result.rmse = std::sqrt(mse);
+    result.psnr = mse > 0 ? -10 * std::log10(mse) : std::numeric_limits<double>::infinity();
+    result.ssim = meanSsim(a, b);
+    return result;
+}
+
+Image errorHeatMap(const Image& a, const Image& b, double fullScale) {
+    requireSameSize(a, b);
+    if (!(fullScale > 0)) fullScale = 1;
+    Image map(a.width, a.height, false);
+    for (std::size_t p = 0; p < a.pixels(); ++p) {
+        const double t = std::clamp(std::sqrt(pixelSquaredError(a, b, p) / 3) / fullScale, 0.0, 1.0);
+        // Black → red → yellow → white in thirds: monotone in brightness, readable in grey.
+        map.rgba[4 * p + 0] = float(std::clamp(3 * t, 0.0, 1.0));
+        map.rgba[4 * p + 1] = float(std::clamp(3 * t - 1, 0.0, 1.0));
+        map.rgba[4 * p + 2] = float(std::clamp(3 * t - 2, 0.0, 1.0));
+        map.rgba[4 * p + 3] = 1;
+    }
+    return map;
+}
+
+std::vector<std::string> comparedChannels(const std::filesystem::path& exrFile) {
+    std::vector<std::string> names;
+    try {
+        Imf::InputFile exr(exrFile.c_str());
+        for (auto it = exr.header().channels().begin(); it != exr.header().channels().end(); ++it) {
+            const std::string name = it.name();
+            if (name != "Z" && name != "level") names.push_back(name);
+        }
+    } catch (const std::exception& e) {
+        throw InputError(exrFile, std::string("cannot read EXR: ") + e.what());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+}  // namespace vtex::render
