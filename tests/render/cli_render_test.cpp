@@ -1,0 +1,85 @@
+// `vtex render` end to end: files written, exit statuses, errors naming the file and key.
+#include "fixtures.h"
+#include "run_vtex.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+using namespace vtex::render;
+using vtex::test::runVtex;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path makeSceneDir(const std::string& name, const std::string& cameraExtra = "") {
+    const fs::path dir = fs::path(VTEX_TEST_TMP) / "cli" / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir / "meshes");
+    std::ofstream(dir / "meshes" / "plane.obj") << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 2 0 0.5\nv 3 0 0.5\nv 3 2 0.5\nv 2 2 0.5\nf 1 2 3 4\nf 5 6 7 8\n";
+    const auto tree = test::makeOctree(4, [](int x, int y, int z) -> std::optional<vtex::octree::VoxelData> {
+        if ((x + y) % 3 != 0 || z > 10) return std::nullopt;
+        return test::sphereVoxel(40, {0.2f, 0.7f, 0.2f});
+    }, true);
+    vtex::octree::writeVto(*tree, dir / "t.vto");
+    std::ofstream(dir / "scene.toml") << "[camera]\nposition = [1, -3, 2.5]\nlook_at = [1.2, 1, 0]\nwidth = 40\nheight = 30\n"
+                                      << cameraExtra
+                                      << "[[light]]\ntype = \"directional\"\ndirection = [-1, 0.5, -1]\ncolor = [3, 3, 3]\n"
+                                         "[[texel]]\nname = \"t\"\nvolume = \"t.vto\"\n"
+                                         "[[surface]]\nmesh = \"meshes/plane.obj\"\ntexel = \"t\"\nheight = 0.4\nrepeat = [2, 2]\n";
+    return dir;
+}
+
+}  // namespace
+
+TEST(RenderCli, WritesExrPngAndStats) {
+    const fs::path dir = makeSceneDir("ok");
+    const auto r = runVtex({"render", (dir / "scene.toml").string(), "-o", (dir / "img.exr").string(), "--png",
+                            (dir / "img.png").string(), "--stats", (dir / "stats.json").string(), "--aov",
+                            "--threads", "2", "--spp", "4", "--lod-bias", "0.5"});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    EXPECT_TRUE(r.out.empty());
+    const Image image = readExr(dir / "img.exr");
+    EXPECT_EQ(image.width, 40);
+    EXPECT_EQ(image.height, 30);
+    EXPECT_TRUE(image.hasAovs());
+    double sum = 0;
+    for (std::size_t i = 0; i < image.pixels(); ++i) sum += image.rgba[4 * i + 3];
+    EXPECT_GT(sum, 0.2 * double(image.pixels()));
+    EXPECT_GT(fs::file_size(dir / "img.png"), 100u);
+    const std::string stats = vtex::test::readText(dir / "stats.json");
+    for (const char* key : {"wall_seconds", "threads", "primary", "shadow", "voxels_visited", "level_histogram"})
+        EXPECT_NE(stats.find(key), std::string::npos) << key;
+    // --width/--height override the camera.
+    const auto small = runVtex({"render", (dir / "scene.toml").string(), "-o", (dir / "small.exr").string(),
+                                "--width", "8", "--height", "6", "--quiet"});
+    ASSERT_EQ(small.exitStatus, 0) << small.err;
+    EXPECT_EQ(readExr(dir / "small.exr").width, 8);
+}
+
+TEST(RenderCli, BadInputExitsThreeNamingFileAndKey) {
+    const fs::path dir = makeSceneDir("bad", "fov_y = \"wide\"\n");
+    const auto r = runVtex({"render", (dir / "scene.toml").string(), "-o", (dir / "img.exr").string()});
+    EXPECT_EQ(r.exitStatus, 3);
+    EXPECT_NE(r.err.find("scene.toml"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("camera.fov_y"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "img.exr"));
+
+    const fs::path unknown = makeSceneDir("unknown", "focal = 3\n");
+    const auto w = runVtex({"render", (unknown / "scene.toml").string(), "-o", (unknown / "img.exr").string()});
+    EXPECT_EQ(w.exitStatus, 0) << w.err;
+    EXPECT_NE(w.err.find("warning"), std::string::npos);
+    EXPECT_NE(w.err.find("camera.focal"), std::string::npos);
+
+    // A corrupted octree is refused with exit 3, naming it.
+    const fs::path corrupt = makeSceneDir("corrupt");
+    std::ofstream(corrupt / "t.vto", std::ios::binary | std::ios::trunc) << "not an octree";
+    const auto c = runVtex({"render", (corrupt / "scene.toml").string(), "-o", (corrupt / "img.exr").string()});
+    EXPECT_EQ(c.exitStatus, 3);
+    EXPECT_NE(c.err.find("t.vto"), std::string::npos) << c.err;
+
+    const auto missing = runVtex({"render", (dir / "nope.toml").string(), "-o", (dir / "img.exr").string()});
+    EXPECT_EQ(missing.exitStatus, 3);
+    const auto usage = runVtex({"render", (unknown / "scene.toml").string(), "-o", (dir / "img.exr").string(), "--shading", "magic"});
+    EXPECT_EQ(usage.exitStatus, 2);
+}

@@ -1,0 +1,124 @@
+// Small in-memory scenes for the render tests: base meshes, octrees built through the octree
+// stage's own builder, and a helper to render them.
+#pragma once
+
+#include <vtex/octree/octree.h>
+#include <vtex/octree/voxel.h>
+#include <vtex/render/renderer.h>
+
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <optional>
+
+namespace vtex::render::test {
+
+/// One quad (or a grid of n×n quads) over [x0,x1]×[y0,y1] at z, normals +z.
+inline std::shared_ptr<ingest::QuadMesh> gridMesh(double x0, double y0, double x1, double y1, double z, int n = 1) {
+    auto mesh = std::make_shared<ingest::QuadMesh>();
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) {
+            mesh->positions.emplace_back(float(x0 + (x1 - x0) * i / n), float(y0 + (y1 - y0) * j / n), float(z));
+            mesh->normals.emplace_back(0.f, 0.f, 1.f);
+        }
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const std::uint32_t a = std::uint32_t(j * (n + 1) + i);
+            mesh->quads.push_back({a, a + 1, a + std::uint32_t(n) + 2, a + std::uint32_t(n) + 1});
+        }
+    return mesh;
+}
+
+/// A quad mesh from four explicit corners (counter-clockwise) and one normal each.
+inline std::shared_ptr<ingest::QuadMesh> quadMesh(const std::array<Eigen::Vector3f, 4>& p,
+                                                  const std::array<Eigen::Vector3f, 4>& n) {
+    auto mesh = std::make_shared<ingest::QuadMesh>();
+    for (int i = 0; i < 4; ++i) {
+        mesh->positions.push_back(p[std::size_t(i)]);
+        mesh->normals.push_back(n[std::size_t(i)]);
+    }
+    mesh->quads.push_back({0, 1, 2, 3});
+    return mesh;
+}
+
+/// An octree of 2^L voxels per side whose voxel (x,y,z) holds `voxel(x,y,z)` (density 0 =
+/// empty), built without compression so that every level is stored.
+inline std::shared_ptr<const octree::Octree> makeOctree(
+    int levels, const std::function<std::optional<octree::VoxelData>(int, int, int)>& voxel, bool compress = false) {
+    octree::SparseVolume volume;
+    volume.info.levels = std::uint32_t(levels);
+    const int n = 1 << levels;
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const auto data = voxel(x, y, z);
+                if (!data || data->density == 0) continue;
+                octree::VolumeBlock block;
+                block.key = octree::mortonEncode(std::uint32_t(x), std::uint32_t(y), std::uint32_t(z));
+                block.level = std::uint8_t(levels);
+                block.data = *data;
+                volume.blocks.push_back(block);
+            }
+    volume.sortBlocks();
+    octree::BuildOptions options;
+    options.compress = compress;
+    NullProgress progress;
+    return std::make_shared<const octree::Octree>(octree::buildOctree(volume, options, progress));
+}
+
+inline octree::VoxelData sphereVoxel(float density, std::array<float, 3> albedo = {0.8f, 0.8f, 0.8f}) {
+    octree::VoxelData v;
+    v.density = density;
+    octree::packIsotropic(v);
+    v.albedo = albedo;
+    return v;
+}
+
+/// A scene with one camera and one directional light from above, no surfaces yet.
+inline Scene baseScene(Eigen::Vector3d eye, Eigen::Vector3d target, double fov = 30, int size = 64) {
+    Scene scene;
+    scene.camera.position = eye;
+    scene.camera.lookAt = target;
+    scene.camera.up = Eigen::Vector3d(0, 0, 1);
+    if (std::abs((target - eye).normalized().z()) > 0.99) scene.camera.up = Eigen::Vector3d(0, 1, 0);
+    scene.camera.fovY = fov;
+    scene.camera.width = size;
+    scene.camera.height = size;
+    Light light;
+    light.direction = Eigen::Vector3d(-0.3, 0.2, -1).normalized();
+    light.color = Color(3, 3, 3);
+    scene.lights.push_back(light);
+    return scene;
+}
+
+inline std::size_t addTexel(Scene& scene, std::shared_ptr<const octree::Octree> tree, double tau = 1) {
+    TexelDef t;
+    t.name = "t" + std::to_string(scene.texels.size());
+    t.octree = std::move(tree);
+    t.tau = tau;
+    scene.texels.push_back(t);
+    return scene.texels.size() - 1;
+}
+
+inline void addSurface(Scene& scene, std::shared_ptr<const ingest::QuadMesh> mesh, std::optional<std::size_t> texel,
+                       double height = 1, std::array<double, 2> repeat = {1, 1}) {
+    SurfaceDef s;
+    s.meshData = std::move(mesh);
+    s.texel = texel;
+    s.height = height;
+    s.repeat = repeat;
+    scene.surfaces.push_back(s);
+}
+
+inline RenderResult renderQuiet(const Scene& scene, RenderOptions options = {}) {
+    NullProgress progress;
+    return renderScene(scene, options, progress);
+}
+
+inline bool allFinite(const Image& image) {
+    for (float v : image.rgba)
+        if (!std::isfinite(v)) return false;
+    return true;
+}
+
+}  // namespace vtex::render::test

@@ -1,0 +1,117 @@
+// scene.toml parsing: values, defaults, relative paths, errors naming file and key, warnings.
+#include <vtex/core/error.h>
+#include <vtex/render/scene.h>
+
+#include <gtest/gtest.h>
+
+using namespace vtex::render;
+
+namespace {
+
+const char* kGood = R"(
+[camera]
+position = [0, -6, 3]
+look_at  = [0, 0, 0]
+up       = [0, 0, 1]
+fov_y    = 40
+width    = 64
+height   = 48
+
+[[light]]
+type      = "directional"
+direction = [-1, -0.5, -1]
+color     = [3, 3, 3]
+
+[[light]]
+type     = "point"
+position = [1, 2, 3]
+
+[[texel]]
+name   = "grass"
+volume = "grass.vto"
+source = "grass.glb"
+tau    = 2.5
+material = { diffuse = [1, 1, 1], specular = [0.1, 0.1, 0.1], shininess = 20, ambient = [0.02, 0.02, 0.02] }
+
+[[surface]]
+mesh      = "meshes/hill.obj"
+texel     = "grass"
+height    = 0.2
+placement = "under"
+repeat    = [2, 3]
+material  = { diffuse = [0.3, 0.25, 0.2] }
+
+[[surface]]
+mesh = "/abs/rock.obj"
+)";
+
+std::string errorOf(const std::string& text) {
+    try {
+        parseScene(text, "/scenes/s.toml");
+    } catch (const vtex::InputError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+std::string replace(std::string text, const std::string& from, const std::string& to) {
+    const auto at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return text;
+}
+
+}  // namespace
+
+TEST(Scene, ParsesTheDesignSketch) {
+    const Scene s = parseScene(kGood, "/scenes/s.toml");
+    EXPECT_EQ(s.camera.width, 64);
+    EXPECT_EQ(s.camera.height, 48);
+    EXPECT_DOUBLE_EQ(s.camera.fovY, 40);
+    ASSERT_EQ(s.lights.size(), 2u);
+    EXPECT_EQ(s.lights[0].type, LightType::Directional);
+    EXPECT_NEAR(s.lights[0].direction.norm(), 1, 1e-12);
+    EXPECT_EQ(s.lights[1].type, LightType::Point);
+    EXPECT_EQ(s.lights[1].color, Color(1, 1, 1));
+    ASSERT_EQ(s.texels.size(), 1u);
+    EXPECT_EQ(s.texels[0].volume, std::filesystem::path("/scenes/grass.vto"));
+    EXPECT_DOUBLE_EQ(s.texels[0].tau, 2.5);
+    EXPECT_DOUBLE_EQ(s.texels[0].material.shininess, 20);
+    ASSERT_EQ(s.surfaces.size(), 2u);
+    EXPECT_EQ(s.surfaces[0].mesh, std::filesystem::path("/scenes/meshes/hill.obj"));
+    EXPECT_EQ(s.surfaces[0].texel, std::optional<std::size_t>(0));
+    EXPECT_EQ(s.surfaces[0].placement, Placement::Under);
+    EXPECT_DOUBLE_EQ(s.surfaces[0].repeat[1], 3);
+    EXPECT_EQ(s.surfaces[0].material.diffuse, Color(0.3, 0.25, 0.2));
+    EXPECT_EQ(s.surfaces[1].mesh, std::filesystem::path("/abs/rock.obj"));
+    EXPECT_FALSE(s.surfaces[1].texel);
+    EXPECT_TRUE(s.warnings.empty());
+}
+
+TEST(Scene, MissingAndWrongKeysNameFileAndKey) {
+    EXPECT_EQ(errorOf(replace(kGood, "look_at  = [0, 0, 0]", "")), "/scenes/s.toml: camera.look_at: missing key");
+    EXPECT_NE(errorOf(replace(kGood, "fov_y    = 40", "fov_y = \"wide\"")).find("camera.fov_y: must be a number"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "fov_y    = 40", "fov_y = 190")).find("camera.fov_y"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "width    = 64", "width = 6.5")).find("camera.width: must be an integer"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "color     = [3, 3, 3]", "color = [3, 3]")).find("light[0].color"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "color     = [3, 3, 3]", "color = [3, -3, 3]")).find("light[0].color"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "type     = \"point\"", "type = \"spot\"")).find("light[1].type"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "texel     = \"grass\"", "texel = \"moss\"")).find("surface[0].texel: no [[texel]] is named 'moss'"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "height    = 0.2", "height = 0")).find("surface[0].height"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "placement = \"under\"", "placement = \"over\"")).find("surface[0].placement"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "repeat    = [2, 3]", "repeat = [2, 0]")).find("surface[0].repeat"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "shininess = 20", "shininess = nan")).find("texel[0].material.shininess"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "mesh = \"/abs/rock.obj\"", "")).find("surface[1].mesh: missing key"), std::string::npos);
+    EXPECT_NE(errorOf(replace(kGood, "look_at  = [0, 0, 0]", "look_at = [0, -6, 3]")).find("camera.look_at"), std::string::npos);
+    EXPECT_NE(errorOf("[camera\nposition = 1").find("TOML syntax error"), std::string::npos);
+    EXPECT_NE(errorOf("").find("camera: missing table"), std::string::npos);
+    EXPECT_NE(errorOf(std::string(kGood) + "\n[[texel]]\nname = \"grass\"\nvolume = \"b.vto\"\n").find("duplicate texel name"), std::string::npos);
+}
+
+TEST(Scene, UnknownKeysAreWarnings) {
+    const Scene s = parseScene(replace(replace(kGood, "fov_y    = 40", "fov_y = 40\nfocal = 3"), "tau    = 2.5", "tau = 2.5\ncolour = 1"),
+                               "/scenes/s.toml");
+    ASSERT_EQ(s.warnings.size(), 2u);
+    EXPECT_NE(s.warnings[0].find("camera.focal"), std::string::npos);
+    EXPECT_NE(s.warnings[1].find("texel[0].colour"), std::string::npos);
+}
