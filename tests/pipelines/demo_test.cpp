@@ -4,6 +4,7 @@
 
 #include <vtex/octree/octree.h>
 #include <vtex/octree/volume.h>
+#include <vtex/render/image.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -43,6 +44,16 @@ TEST(Demo, RunsEveryExistingStageAndItsSummaryMatchesTheArtifacts) {
         if (volume.info.solidDensity == 0) {
             EXPECT_NEAR(volume.totalMass() / (0.5 * volume.info.sourceArea), 1.0, 1e-4) << name;
         }
+
+        // The hill render: finite, not black, and the texel covers part of it.
+        const auto image = vtex::render::readExr(dir / (name + "-hill.exr"));
+        double sum = 0;
+        for (float v : image.rgba) {
+            ASSERT_TRUE(std::isfinite(v)) << name;
+            sum += v;
+        }
+        EXPECT_GT(sum, 0) << name;
+        EXPECT_GT(pattern["render"]["rays"].get<double>(), double(image.width * image.height)) << "shadow rays too";
 
         for (const std::string rule : {"neyret", "sggx"}) {
             const auto octree = vtex::octree::readVto(dir / (name + "-" + rule + ".vto"));

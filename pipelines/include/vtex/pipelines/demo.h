@@ -4,8 +4,10 @@
 ///
 /// Today it runs every stage that exists: each of the paper's patterns is generated, written as
 /// the canonical .glb, read back through ingest (as any user file would be), sampled into the
-/// finest level (.vtl), and built into an octree with both filter rules (.vto). The summary
-/// lists, per pattern, what was made and what it cost, and is also written as demo.json.
+/// finest level (.vtl), built into an octree with both filter rules (.vto), and rendered on a
+/// hill of 144 bilinear faces (a scene file per texel, written beside the images so that
+/// `vtex render` can redo them). The summary lists, per pattern, what was made and what it
+/// cost, and is also written as demo.json.
 #pragma once
 
 #include <vtex/core/progress.h>
@@ -42,7 +44,9 @@ struct DemoPattern {
     double compressionNeyret = 0;     ///< 1 − stored / N³
     double compressionSggx = 0;
     std::vector<DemoLevel> levels;
-    double secondsPattern = 0, secondsIngest = 0, secondsSample = 0, secondsBuild = 0;
+    double secondsPattern = 0, secondsIngest = 0, secondsSample = 0, secondsBuild = 0, secondsRender = 0;
+    double meanLevel = 0;     ///< of the hill render's level choices
+    std::uint64_t rays = 0;   ///< primary and shadow rays of the hill render
     std::vector<std::filesystem::path> files;  ///< the artifacts written
 };
 
@@ -50,6 +54,7 @@ struct DemoReport {
     DemoOptions options;
     std::vector<DemoPattern> patterns;
     double seconds = 0;
+    int hillFaces = 0;                  ///< bilinear faces of the base surface
     std::filesystem::path summaryFile;  ///< demo.json
 };
 
