@@ -8,12 +8,26 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 namespace vtex::render::detail {
+
+// The number of set bits below bit c of a child mask, from a table: without -mpopcnt,
+// std::popcount is a library call, and this lookup runs at every level of every step.
+inline constexpr auto kBitsBelow = [] {
+    std::array<std::array<std::uint8_t, 8>, 256> table{};
+    for (unsigned mask = 0; mask < 256; ++mask)
+        for (unsigned c = 0; c < 8; ++c) {
+            unsigned n = 0;
+            for (unsigned b = 0; b < c; ++b) n += (mask >> b) & 1u;
+            table[mask][c] = std::uint8_t(n);
+        }
+    return table;
+}();
 
 struct Located {
     const octree::OctreeNode* node;  ///< nullptr for empty space
@@ -29,7 +43,7 @@ inline Located locate(const octree::Octree& tree, int level, std::uint32_t x, st
         const int shift = level - l - 1;
         const unsigned c = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
         if (!(node->childMask & (1u << c))) return {nullptr, l + 1};
-        const unsigned before = unsigned(std::popcount(unsigned(node->childMask) & ((1u << c) - 1u)));
+        const unsigned before = kBitsBelow[node->childMask][c];
         node = &tree.levels[std::size_t(l + 1)][node->firstChild + before];
         ++l;
     }

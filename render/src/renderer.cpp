@@ -45,6 +45,9 @@ using detail::Prim;
 using detail::Tracer;
 
 constexpr double kTransmittanceCutoff = 1e-4;
+// Shadow rays from inside a texel march one level coarser than the camera ray (a cone twice as
+// wide): soft shadows need less detail than what is seen, and this halves their cost.
+constexpr double kShadowConeScale = 2.0;
 
 struct TexelRuntime {
     std::shared_ptr<const octree::Octree> tree;
@@ -105,8 +108,9 @@ public:
         PathState state;
         ++counters.primary;
         double tNear = 0;
+        detail::SpanCache cache;
         for (int bounce = 0; bounce < 4096 && state.transmittance > kTransmittanceCutoff; ++bounce) {
-            const auto hit = mTracer.trace(o, d, tNear);
+            const auto hit = mTracer.trace(o, d, tNear, std::numeric_limits<double>::infinity(), &cache);
             if (!hit) break;
             const Prim& prim = mTracer.prims()[std::size_t(hit->prim)];
             const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
@@ -246,8 +250,9 @@ private:
         ++counters.shadow;
         double transmittance = 1;
         double tNear = 0;
+        detail::SpanCache cache;
         for (int step = 0; step < 4096; ++step) {
-            const auto hit = mTracer.trace(o, l, tNear, tMax);
+            const auto hit = mTracer.trace(o, l, tNear, tMax, &cache);
             if (!hit) break;
             const Prim& prim = mTracer.prims()[std::size_t(hit->prim)];
             if (!prim.textured) return 0;
@@ -346,10 +351,10 @@ private:
                         Color e;
                         if (!lightAt(mScene.lights[i], x, lw, distance, e)) continue;
                         // One shadow ray at the first lit voxel, another each time the local
-                        // transmittance has halved since: the shadow varies with depth into
-                        // the texel, not from voxel to voxel.
-                        if (!shadowValid[i] || r.transmittance < 0.5 * shadowAt[i]) {
-                            shadowT[i] = shadowTransmittance(x, lw, distance, mConeSpread * tWorld,
+                        // transmittance has fallen to a quarter since: the shadow varies with
+                        // depth into the texel, not from voxel to voxel.
+                        if (!shadowValid[i] || r.transmittance < 0.25 * shadowAt[i]) {
+                            shadowT[i] = shadowTransmittance(x, lw, distance, kShadowConeScale * mConeSpread * tWorld,
                                                              int(&prim - mTracer.prims().data()), rc, counters);
                             shadowAt[i] = r.transmittance;
                             shadowValid[i] = true;

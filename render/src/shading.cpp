@@ -83,6 +83,8 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
     const DiscLattice& points = lattice(samples);
     double diffuse = 0, specular = 0;
     const double specularNorm = (shininess + 2) / (2 * std::numbers::pi);
+    // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
+    const double cosCutoff = shininess > 0 ? std::pow(1e-6, 1 / shininess) : 0.0;
     for (int n = 0; n < points.n; ++n) {
         const double u = points.x[std::size_t(n)], v = points.y[std::size_t(n)];
         const double w = std::sqrt(std::max(0.0, 1 - u * u - v * v));
@@ -95,7 +97,7 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
         diffuse += nl;
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
         const double cosAlpha = 2 * nl * m.z() - lv;
-        if (cosAlpha > 0) specular += nl * std::pow(cosAlpha, shininess);
+        if (cosAlpha > cosCutoff) specular += nl * std::pow(cosAlpha, shininess);
     }
     return {diffuse / (points.n * std::numbers::pi), specular * specularNorm / points.n};
 }

@@ -24,6 +24,7 @@ struct TraceContext {
     double tNear;
     double tBest;
     Hit best;
+    SpanCache* cache;
 };
 
 void boundsFunction(const RTCBoundsFunctionArguments* args) {
@@ -69,8 +70,29 @@ void intersectFunction(const RTCIntersectFunctionNArguments* args) {
         hit.u = h->u;
         hit.v = h->v;
     } else {
-        std::array<CellSpan, 4> spans;
-        const int count = cellSpans(prim.cell, ctx->o, ctx->d, spans);
+        std::array<CellSpan, 4> local;
+        const std::array<CellSpan, 4>* spansPtr = nullptr;
+        int count = 0;
+        if (SpanCache* cache = ctx->cache) {
+            for (int i = 0; i < cache->used; ++i)
+                if (cache->prim[std::size_t(i)] == int(args->primID)) {
+                    spansPtr = &cache->spans[std::size_t(i)];
+                    count = cache->count[std::size_t(i)];
+                    break;
+                }
+            if (!spansPtr) {
+                const std::size_t slot = std::size_t(cache->next);
+                cache->count[slot] = count = cellSpans(prim.cell, ctx->o, ctx->d, cache->spans[slot]);
+                cache->prim[slot] = int(args->primID);
+                spansPtr = &cache->spans[slot];
+                cache->next = (cache->next + 1) % SpanCache::kSize;
+                cache->used = std::min(cache->used + 1, SpanCache::kSize);
+            }
+        } else {
+            count = cellSpans(prim.cell, ctx->o, ctx->d, local);
+            spansPtr = &local;
+        }
+        const std::array<CellSpan, 4>& spans = *spansPtr;
         int chosen = -1;
         for (int i = 0; i < count; ++i) {
             if (spans[std::size_t(i)].tOut > ctx->tNear) {
@@ -135,7 +157,7 @@ Tracer::~Tracer() {
     rtcReleaseDevice(static_cast<RTCDevice>(mDevice));
 }
 
-std::optional<Hit> Tracer::trace(const Vec3& o, const Vec3& d, double tNear, double tFar) const {
+std::optional<Hit> Tracer::trace(const Vec3& o, const Vec3& d, double tNear, double tFar, SpanCache* cache) const {
     if (mPrims.empty()) return std::nullopt;
     TraceContext ctx;
     rtcInitIntersectContext(&ctx.context);
@@ -144,6 +166,7 @@ std::optional<Hit> Tracer::trace(const Vec3& o, const Vec3& d, double tNear, dou
     ctx.d = d;
     ctx.tNear = tNear;
     ctx.tBest = tFar;
+    ctx.cache = cache;
     RTCRayHit rayhit;
     rayhit.ray.org_x = float(o.x());
     rayhit.ray.org_y = float(o.y());

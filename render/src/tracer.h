@@ -27,6 +27,18 @@ struct Hit {
     CellSpan span;       ///< cells: the span entered (tIn may be < tNear when the ray starts inside)
 };
 
+/// The spans of the cells a ray has met, kept across the trace() calls of one ray (same origin
+/// and direction, growing tNear): Embree offers the cells behind tNear again, and their six
+/// patch tests would be repeated for nothing. A small ring buffer; one per ray, never shared.
+struct SpanCache {
+    static constexpr int kSize = 16;
+    std::array<int, kSize> prim;
+    std::array<int, kSize> count;
+    std::array<std::array<CellSpan, 4>, kSize> spans;
+    int used = 0;
+    int next = 0;
+};
+
 class Tracer {
 public:
     explicit Tracer(std::vector<Prim> prims);
@@ -37,7 +49,8 @@ public:
     /// The nearest primitive along o + t·d with t > tNear (a cell also when the ray is inside
     /// it at tNear, with its span clipped to start there), t < tFar.
     std::optional<Hit> trace(const Vec3& o, const Vec3& d, double tNear,
-                             double tFar = std::numeric_limits<double>::infinity()) const;
+                             double tFar = std::numeric_limits<double>::infinity(),
+                             SpanCache* cache = nullptr) const;
 
     const std::vector<Prim>& prims() const { return mPrims; }
 
