@@ -1,0 +1,46 @@
+// `vtex run pipeline.toml [-o DIR] [--force] [--jobs N]`: a staged batch run with caching.
+#include "cli.h"
+
+#include <vtex/core/error.h>
+#include <vtex/pipelines/pipeline.h>
+
+#include <iostream>
+
+namespace vtex::cli {
+namespace {
+
+const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
+    app.name("run");
+    app.description("Run a pipeline file: sources → texels → renders → comparisons, each stage cached by a "
+                    "content hash of its inputs and parameters; writes report.json and report.html");
+    struct Options {
+        std::string file, output;
+        bool force = false;
+        int jobs = 0;
+    };
+    auto o = std::make_shared<Options>();
+    app.add_option("PIPELINE", o->file, "The pipeline file (.toml)")->required();
+    app.add_option("-o,--output", o->output, "Output directory (default: the file's [pipeline] output, or <name>-out)");
+    app.add_flag("--force", o->force, "Redo every stage, cached or not");
+    app.add_option("--jobs", o->jobs, "Stages run at once (0: as many as cores)")->check(CLI::Range(0, 1024));
+    return [o](const GlobalOptions& global) {
+        const pipelines::Pipeline pipeline = pipelines::loadPipeline(o->file);
+        for (const auto& w : pipeline.warnings) warning(global, w);
+        pipelines::RunOptions options;
+        options.output = o->output;
+        options.force = o->force;
+        options.jobs = o->jobs;
+        options.log = [&global](const std::string& line) { status(global, line); };
+        const pipelines::RunReport report = pipelines::runPipeline(pipeline, options);
+        status(global, "report: " + report.reportHtml.string());
+        if (!report.succeeded()) {
+            for (const auto& stage : report.stages)
+                if (stage.status == pipelines::StageRecord::Status::Failed)
+                    throw std::runtime_error(stage.kind + " '" + stage.name + "' failed: " + stage.message);
+            throw std::runtime_error("some stages did not run");
+        }
+    };
+});
+
+}  // namespace
+}  // namespace vtex::cli

@@ -1,0 +1,114 @@
+/// @file
+/// @brief `vtex run`: staged batch runs of a pipeline file, with a content-hash cache.
+///
+/// A pipeline file (TOML) names source meshes (procedural patterns or files), the texels to
+/// sample and build from them, the scenes to render with those texels, and the comparisons of
+/// renders. Each stage's outputs are keyed by a hash of its parameters, the content of its input
+/// files and artifacts, and the vtex version; an up-to-date stage is not run again. Outputs are
+/// written atomically and recorded in a manifest written after them, so a run killed at any
+/// moment never leaves an artifact that a later run would trust half-written, and a cached
+/// artifact whose content no longer matches its manifest (corrupted, edited) is rebuilt.
+///
+/// Layout of the output directory: sources/<name>.glb, texels/<name>.vtl and .vto,
+/// renders/<name>.exr/.png/.stats.json, compares/<name>.json and .diff.png, each with a
+/// <name>.manifest.json; report.json and report.html at the top.
+#pragma once
+
+#include <vtex/core/progress.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vtex::pipelines {
+
+struct SourceStep {
+    std::string name;
+    std::string pattern;            ///< a `vtex pattern` name, or empty when `file` is given
+    std::filesystem::path file;     ///< a mesh file for ingest (resolved against the pipeline file)
+    std::uint64_t seed = 1;         ///< pattern parameters (see sampler::PatternOptions)
+    int count = 0;
+    double fluctuation = -1;
+    double leanDegrees = 0;
+    std::string variant;
+};
+
+struct TexelStep {
+    std::string name;
+    std::string source;                 ///< a SourceStep name
+    std::uint32_t resolution = 64;      ///< finest voxels per side (power of two)
+    std::optional<bool> cyclic;         ///< default: whether the source pattern is cyclic
+    std::string solid = "auto";         ///< auto | on | off
+    std::string filter = "sggx";        ///< neyret | sggx
+    double tolerance = 0;
+};
+
+struct RenderStep {
+    std::string name;
+    std::filesystem::path scene;        ///< a scene file (resolved against the pipeline file)
+    /// Scene texel name → pipeline texel name: those texels use the built octrees and sources.
+    std::map<std::string, std::string> texels;
+    int width = 0, height = 0;          ///< 0: the scene's camera
+    int spp = 1;
+    double lodBias = 0;
+    std::string shading = "fast";       ///< fast | reference
+};
+
+struct CompareStep {
+    std::string name;
+    std::string a, b;                   ///< RenderStep names
+};
+
+struct Pipeline {
+    std::filesystem::path file;
+    std::filesystem::path output;       ///< [pipeline] output, resolved; default "<file stem>-out"
+    std::vector<SourceStep> sources;
+    std::vector<TexelStep> texels;
+    std::vector<RenderStep> renders;
+    std::vector<CompareStep> compares;
+    std::vector<std::string> warnings;  ///< unknown keys
+};
+
+/// Reads and validates a pipeline file completely (names unique, references resolved, enums and
+/// ranges checked, input files present) before anything runs. Throws vtex::InputError naming the
+/// file and the key.
+Pipeline loadPipeline(const std::filesystem::path& file);
+
+struct RunOptions {
+    std::filesystem::path output;       ///< overrides Pipeline::output when not empty
+    bool force = false;                 ///< redo every stage
+    int jobs = 0;                       ///< stages run at once; 0 = as many as cores
+    /// One line per stage event ("run texel grass", "cached …", "failed …"); may be empty.
+    std::function<void(const std::string&)> log;
+};
+
+struct StageRecord {
+    std::string kind;                   ///< source | texel | render | compare
+    std::string name;
+    std::string key;                    ///< the content hash that keys the outputs (hex)
+    enum class Status { Ran, Cached, Failed, Skipped } status = Status::Skipped;
+    std::string message;                ///< why it failed or was skipped
+    double seconds = 0;                 ///< work time (0 when cached)
+    std::vector<std::filesystem::path> outputs;
+    std::string detailsJson;            ///< stage figures (sizes, compression, render stats…)
+};
+
+struct RunReport {
+    std::filesystem::path output;
+    std::vector<StageRecord> stages;
+    double seconds = 0;
+    std::filesystem::path reportJson, reportHtml;
+    bool succeeded() const;
+};
+
+/// Runs the pipeline. Writes report.json and report.html whatever happens; a failed stage stops
+/// the stages that depend on it and leaves the others' outputs valid. Returns the report; the
+/// caller decides the exit status from RunReport::succeeded() (the first failure's message is in
+/// its record). Throws vtex::IoError when the output directory cannot be written.
+RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options);
+
+}  // namespace vtex::pipelines

@@ -1,0 +1,148 @@
+// pipeline.toml → Pipeline, validated completely before anything runs.
+#include <vtex/pipelines/pipeline.h>
+
+#include <vtex/core/error.h>
+#include <vtex/core/toml_reader.h>
+#include <vtex/sampler/patterns.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace vtex::pipelines {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string indexed(std::string_view table, std::size_t i) {
+    return std::string(table) + "[" + std::to_string(i) + "]";
+}
+
+// Step names become file names in the output directory.
+void checkName(const TomlReader& reader, const std::string& key, const std::string& name,
+               std::set<std::string>& seen) {
+    if (name.empty() || name.size() > 100 || name.find_first_of("/\\\0", 0, 3) != std::string::npos ||
+        name == "." || name == ".." || name.front() == '.')
+        reader.fail(key, "'" + name + "' is not a usable name (no slashes, not empty, not starting with '.')");
+    if (!seen.insert(name).second) reader.fail(key, "duplicate name '" + name + "'");
+}
+
+void requireFile(const TomlReader& reader, const std::string& key, const fs::path& path) {
+    if (!fs::is_regular_file(path)) reader.fail(key, "no such file: " + path.string());
+}
+
+}  // namespace
+
+Pipeline loadPipeline(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(file, "cannot open the pipeline file");
+    std::ostringstream text;
+    text << in.rdbuf();
+
+    Pipeline pipeline;
+    pipeline.file = file;
+    TomlReader reader(file, pipeline.warnings);
+    const toml::table root = reader.parse(text.str());
+    reader.checkKeys(root, "", {"pipeline", "source", "texel", "render", "compare"});
+
+    pipeline.output = file.parent_path() / (file.stem().string() + "-out");
+    if (const toml::table* settings = reader.subtable(root, "", "pipeline", false)) {
+        reader.checkKeys(*settings, "pipeline", {"output"});
+        if (settings->contains("output")) pipeline.output = reader.resolve(reader.string(*settings, "pipeline", "output", {}));
+    }
+
+    std::set<std::string> sourceNames, texelNames, renderNames, compareNames;
+    const auto patterns = sampler::patternNames();
+    const auto sources = reader.arrayOfTables(root, "source");
+    for (std::size_t i = 0; i < sources.size(); ++i) {
+        const toml::table& t = *sources[i];
+        const std::string path = indexed("source", i);
+        reader.checkKeys(t, path, {"name", "pattern", "file", "seed", "count", "fluctuation", "lean", "variant"});
+        SourceStep s;
+        s.name = reader.string(t, path, "name", {});
+        checkName(reader, TomlReader::join(path, "name"), s.name, sourceNames);
+        const bool hasPattern = t.contains("pattern"), hasFile = t.contains("file");
+        if (hasPattern == hasFile) reader.fail(path, "give exactly one of 'pattern' and 'file'");
+        if (hasPattern) {
+            s.pattern = reader.string(t, path, "pattern", {});
+            if (std::find(patterns.begin(), patterns.end(), s.pattern) == patterns.end())
+                reader.fail(TomlReader::join(path, "pattern"), "unknown pattern '" + s.pattern + "'");
+        } else {
+            s.file = reader.resolve(reader.string(t, path, "file", {}));
+            requireFile(reader, TomlReader::join(path, "file"), s.file);
+        }
+        s.seed = std::uint64_t(reader.integer(t, path, "seed", 1, 0, std::numeric_limits<long long>::max()));
+        s.count = int(reader.integer(t, path, "count", 0, 0, 1'000'000));
+        s.fluctuation = reader.number(t, path, "fluctuation", -1.0, -1.0, 3.2);
+        s.leanDegrees = reader.number(t, path, "lean", 0.0, -89.0, 89.0);
+        s.variant = reader.string(t, path, "variant", std::string());
+        pipeline.sources.push_back(s);
+    }
+
+    const auto texels = reader.arrayOfTables(root, "texel");
+    for (std::size_t i = 0; i < texels.size(); ++i) {
+        const toml::table& t = *texels[i];
+        const std::string path = indexed("texel", i);
+        reader.checkKeys(t, path, {"name", "source", "resolution", "cyclic", "solid", "filter", "tolerance"});
+        TexelStep s;
+        s.name = reader.string(t, path, "name", {});
+        checkName(reader, TomlReader::join(path, "name"), s.name, texelNames);
+        s.source = reader.string(t, path, "source", {});
+        if (!sourceNames.count(s.source))
+            reader.fail(TomlReader::join(path, "source"), "no [[source]] named '" + s.source + "'");
+        s.resolution = std::uint32_t(reader.integer(t, path, "resolution", 64, 1, 4096));
+        if ((s.resolution & (s.resolution - 1)) != 0)
+            reader.fail(TomlReader::join(path, "resolution"), "must be a power of two");
+        if (t.contains("cyclic")) s.cyclic = reader.boolean(t, path, "cyclic", {});
+        s.solid = reader.choice(t, path, "solid", std::string("auto"), {"auto", "on", "off"});
+        s.filter = reader.choice(t, path, "filter", std::string("sggx"), {"neyret", "sggx"});
+        s.tolerance = reader.number(t, path, "tolerance", 0.0, 0.0, 1e6);
+        pipeline.texels.push_back(s);
+    }
+
+    const auto renders = reader.arrayOfTables(root, "render");
+    for (std::size_t i = 0; i < renders.size(); ++i) {
+        const toml::table& t = *renders[i];
+        const std::string path = indexed("render", i);
+        reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading"});
+        RenderStep s;
+        s.name = reader.string(t, path, "name", {});
+        checkName(reader, TomlReader::join(path, "name"), s.name, renderNames);
+        s.scene = reader.resolve(reader.string(t, path, "scene", {}));
+        requireFile(reader, TomlReader::join(path, "scene"), s.scene);
+        if (const toml::table* bindings = reader.subtable(t, path, "texels", false)) {
+            for (const auto& [sceneName, node] : *bindings) {
+                const std::string key = TomlReader::join(TomlReader::join(path, "texels"), sceneName.str());
+                const auto value = node.as_string();
+                if (!value) reader.fail(key, "must be the name of a [[texel]]");
+                if (!texelNames.count(value->get())) reader.fail(key, "no [[texel]] named '" + value->get() + "'");
+                s.texels[std::string(sceneName.str())] = value->get();
+            }
+        }
+        s.width = int(reader.integer(t, path, "width", 0, 0, 16384));
+        s.height = int(reader.integer(t, path, "height", 0, 0, 16384));
+        s.spp = int(reader.integer(t, path, "spp", 1, 1, 65536));
+        s.lodBias = reader.number(t, path, "lod_bias", 0.0, -16.0, 16.0);
+        s.shading = reader.choice(t, path, "shading", std::string("fast"), {"fast", "reference"});
+        pipeline.renders.push_back(s);
+    }
+
+    const auto compares = reader.arrayOfTables(root, "compare");
+    for (std::size_t i = 0; i < compares.size(); ++i) {
+        const toml::table& t = *compares[i];
+        const std::string path = indexed("compare", i);
+        reader.checkKeys(t, path, {"name", "a", "b"});
+        CompareStep s;
+        s.name = reader.string(t, path, "name", {});
+        checkName(reader, TomlReader::join(path, "name"), s.name, compareNames);
+        for (auto [key, target] : {std::pair{"a", &s.a}, std::pair{"b", &s.b}}) {
+            *target = reader.string(t, path, key, {});
+            if (!renderNames.count(*target))
+                reader.fail(TomlReader::join(path, key), "no [[render]] named '" + *target + "'");
+        }
+        pipeline.compares.push_back(s);
+    }
+    return pipeline;
+}
+
+}  // namespace vtex::pipelines

@@ -1,0 +1,384 @@
+// Runs a Pipeline: stages in waves (sources, samples, builds, renders, compares), the stages of a
+// wave in parallel, each skipped when its manifest says its outputs are up to date.
+#include <vtex/pipelines/pipeline.h>
+
+#include <vtex/core/atomic_file.h>
+#include <vtex/core/error.h>
+#include <vtex/core/version.h>
+#include <vtex/ingest/ingest.h>
+#include <vtex/octree/octree.h>
+#include <vtex/octree/volume.h>
+#include <vtex/render/compare.h>
+#include <vtex/render/renderer.h>
+#include <vtex/render/scene.h>
+#include <vtex/sampler/patterns.h>
+#include <vtex/sampler/sampler.h>
+
+#include "content_hash.h"
+#include "report.h"
+
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+
+namespace vtex::pipelines {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+using Status = StageRecord::Status;
+
+// What one stage needs to run and what it made.
+struct Stage {
+    Stage(std::string stageKind, std::string stageName) : kind(std::move(stageKind)), name(std::move(stageName)) {}
+
+    std::string kind, name;
+    std::vector<std::size_t> inputs;               // indices of the stages it reads
+    std::function<std::string()> describe;         // canonical text of parameters and inputs
+    std::function<Json(Stage&)> run;               // writes the outputs, returns details
+    std::map<std::string, fs::path> outputs;       // role → path
+    // Filled while running:
+    StageRecord record;
+    std::map<std::string, std::string> outputHashes;  // role → content hash
+};
+
+fs::path manifestPath(const Stage& stage, const fs::path& root) {
+    return root / (stage.kind + "s") / (stage.name + ".manifest.json");
+}
+
+// True when the manifest's key matches and every output still has the recorded content.
+bool upToDate(Stage& stage, const fs::path& root) {
+    const fs::path manifest = manifestPath(stage, root);
+    std::ifstream in(manifest);
+    if (!in) return false;
+    Json j;
+    try {
+        j = Json::parse(in);
+        if (j.at("key").get<std::string>() != stage.record.key) return false;
+        for (const auto& [role, path] : stage.outputs) {
+            const std::string recorded = j.at("outputs").at(role).at("hash").get<std::string>();
+            if (!fs::is_regular_file(path) || hashFile(path) != recorded) return false;
+            stage.outputHashes[role] = recorded;
+        }
+        stage.record.detailsJson = j.value("details", Json::object()).dump();
+    } catch (const std::exception&) {
+        return false;  // unreadable or foreign manifest: redo the stage
+    }
+    return true;
+}
+
+void writeManifest(const Stage& stage, const fs::path& root, const Json& details) {
+    Json outputs = Json::object();
+    for (const auto& [role, path] : stage.outputs)
+        outputs[role] = {{"file", path.filename().string()}, {"hash", stage.outputHashes.at(role)}};
+    const Json manifest = {{"kind", stage.kind},       {"name", stage.name},   {"key", stage.record.key},
+                           {"vtex_version", kVersion}, {"outputs", outputs},   {"seconds", stage.record.seconds},
+                           {"details", details}};
+    writeFileAtomically(manifestPath(stage, root), manifest.dump(2) + "\n");
+}
+
+std::string statusWord(Status s) {
+    switch (s) {
+        case Status::Ran: return "ran";
+        case Status::Cached: return "cached";
+        case Status::Failed: return "failed";
+        case Status::Skipped: return "skipped";
+    }
+    return "?";
+}
+
+std::string readText(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+}  // namespace
+
+bool RunReport::succeeded() const {
+    for (const auto& s : stages)
+        if (s.status == Status::Failed || s.status == Status::Skipped) return false;
+    return true;
+}
+
+RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
+    const auto start = std::chrono::steady_clock::now();
+    const fs::path root = options.output.empty() ? pipeline.output : options.output;
+    for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
+        std::error_code error;
+        fs::create_directories(root / folder, error);
+        if (error) throw IoError(root / folder, "cannot create the output directory: " + error.message());
+        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; no run writes
+        // them now (one run per output directory at a time), so they can go.
+        for (const auto& entry : fs::directory_iterator(root / folder, error)) {
+            const std::string file = entry.path().filename().string();
+            if (file.front() == '.' && file.find(".tmp.") != std::string::npos) fs::remove(entry.path(), error);
+        }
+    }
+    auto log = [&](const std::string& line) {
+        if (options.log) options.log(line);
+    };
+
+    // The stage graph, in waves: every stage's inputs come from an earlier wave.
+    std::vector<Stage> stages;
+    std::map<std::string, std::size_t> sourceIndex, sampleIndex, buildIndex, renderIndex;
+    const std::string header = std::string("vtex ") + kVersion + "\n";
+
+    for (const SourceStep& step : pipeline.sources) {
+        Stage s{"source", step.name};
+        s.outputs["mesh"] = root / "sources" / (step.name + ".glb");
+        s.describe = [step, header] {
+            std::ostringstream d;
+            d << header << "source\n";
+            if (!step.pattern.empty())
+                d << "pattern " << step.pattern << " seed " << step.seed << " count " << step.count << " fluctuation "
+                  << step.fluctuation << " lean " << step.leanDegrees << " variant " << step.variant << "\n";
+            else
+                d << "file " << hashFile(step.file) << "\n";
+            return d.str();
+        };
+        s.run = [step](Stage& self) {
+            ingest::TriangleMesh mesh;
+            if (!step.pattern.empty()) {
+                sampler::PatternOptions o;
+                o.seed = step.seed;
+                o.count = step.count;
+                o.fluctuation = step.fluctuation;
+                o.leanDegrees = step.leanDegrees;
+                o.variant = step.variant;
+                mesh = sampler::makePattern(step.pattern, o);
+            } else {
+                mesh = ingest::loadMesh(step.file);
+            }
+            ingest::writeMeshGlb(mesh, self.outputs.at("mesh"));
+            return Json{{"triangles", mesh.triangles.size()}, {"closed", mesh.closed}};
+        };
+        sourceIndex[step.name] = stages.size();
+        stages.push_back(std::move(s));
+    }
+
+    for (const TexelStep& step : pipeline.texels) {
+        const SourceStep& source = *std::find_if(pipeline.sources.begin(), pipeline.sources.end(),
+                                                 [&](const SourceStep& s) { return s.name == step.source; });
+        const bool cyclic = step.cyclic.value_or(!source.pattern.empty() && sampler::isCyclicPattern(source.pattern));
+        Stage sample{"sample", step.name};
+        sample.inputs = {sourceIndex.at(step.source)};
+        sample.outputs["volume"] = root / "samples" / (step.name + ".vtl");
+        sampleIndex[step.name] = stages.size();
+        stages.push_back(std::move(sample));
+        Stage& s = stages.back();
+        const std::size_t sourceStage = s.inputs[0];
+        s.describe = [&stages, step, cyclic, sourceStage, header] {
+            std::ostringstream d;
+            d << header << "sample\nresolution " << step.resolution << " cyclic " << cyclic << " solid " << step.solid
+              << "\nmesh " << stages[sourceStage].outputHashes.at("mesh") << "\n";
+            return d.str();
+        };
+        s.run = [&stages, step, cyclic, sourceStage](Stage& self) {
+            const ingest::TriangleMesh mesh = ingest::loadMesh(stages[sourceStage].outputs.at("mesh"));
+            sampler::SampleOptions o;
+            o.resolution = step.resolution;
+            o.cyclic = cyclic;
+            o.solid = step.solid == "on" ? sampler::SolidMode::On
+                      : step.solid == "off" ? sampler::SolidMode::Off
+                                            : sampler::SolidMode::Auto;
+            NullProgress quiet;
+            const octree::SparseVolume volume = sampler::sampleMesh(mesh, o, quiet);
+            octree::writeVtl(volume, self.outputs.at("volume"));
+            return Json{{"resolution", step.resolution},
+                        {"occupied_blocks", volume.blocks.size()},
+                        {"source_area", volume.info.sourceArea},
+                        {"fit_error_mean", volume.info.fitError.mean}};
+        };
+
+    }
+
+    // All samples form one wave and all builds the next, so that texels run side by side.
+    for (const TexelStep& step : pipeline.texels) {
+        Stage build{"build", step.name};
+        build.inputs = {sampleIndex.at(step.name)};
+        build.outputs["octree"] = root / "builds" / (step.name + ".vto");
+        buildIndex[step.name] = stages.size();
+        stages.push_back(std::move(build));
+        Stage& b = stages.back();
+        const std::size_t sampleStage = b.inputs[0];
+        b.describe = [&stages, step, sampleStage, header] {
+            std::ostringstream d;
+            d << header << "build\nfilter " << step.filter << " tolerance " << step.tolerance << "\nvolume "
+              << stages[sampleStage].outputHashes.at("volume") << "\n";
+            return d.str();
+        };
+        b.run = [&stages, step, sampleStage](Stage& self) {
+            const octree::SparseVolume volume = octree::readVtl(stages[sampleStage].outputs.at("volume"));
+            octree::BuildOptions o;
+            o.rule = *octree::parseFilterRule(step.filter);
+            o.tolerance = step.tolerance;
+            NullProgress quiet;
+            const octree::Octree tree = octree::buildOctree(volume, o, quiet);
+            octree::writeVto(tree, self.outputs.at("octree"));
+            Json levels = Json::array();
+            for (std::uint32_t l = 0; l < tree.levelCount(); ++l)
+                levels.push_back({{"level", l},
+                                  {"stored_nodes", tree.stats[l].storedNodes},
+                                  {"filter_error_mean", tree.stats[l].filterErrorMean}});
+            return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels}};
+        };
+    }
+
+    for (const RenderStep& step : pipeline.renders) {
+        Stage s{"render", step.name};
+        for (const auto& [sceneTexel, texel] : step.texels) {
+            s.inputs.push_back(buildIndex.at(texel));
+            s.inputs.push_back(sourceIndex.at(std::find_if(pipeline.texels.begin(), pipeline.texels.end(),
+                                                           [&](const TexelStep& t) { return t.name == texel; })
+                                                  ->source));
+        }
+        s.outputs["image"] = root / "renders" / (step.name + ".exr");
+        s.outputs["preview"] = root / "renders" / (step.name + ".png");
+        s.outputs["stats"] = root / "renders" / (step.name + ".stats.json");
+        const std::size_t self = stages.size();
+        renderIndex[step.name] = self;
+        stages.push_back(std::move(s));
+        // Stages are addressed by index: the vector grows while the graph is built.
+        Stage& r = stages.back();
+        // The scene as this render sees it: bound texels point at the pipeline's artifacts.
+        auto boundScene = [&stages, step, self] {
+            render::Scene scene = render::loadScene(step.scene);
+            std::size_t input = 0;
+            for (const auto& [sceneTexel, texel] : step.texels) {
+                auto found = std::find_if(scene.texels.begin(), scene.texels.end(),
+                                          [&](const render::TexelDef& t) { return t.name == sceneTexel; });
+                if (found == scene.texels.end())
+                    throw InputError(step.scene, "the pipeline binds texel '" + sceneTexel + "', which the scene does not define");
+                found->volume = stages[stages[self].inputs[input]].outputs.at("octree");
+                found->source = stages[stages[self].inputs[input + 1]].outputs.at("mesh");
+                input += 2;
+            }
+            return scene;
+        };
+        r.describe = [&stages, step, self, boundScene, header] {
+            std::ostringstream d;
+            d << header << "render\nsize " << step.width << "x" << step.height << " spp " << step.spp << " lod_bias "
+              << step.lodBias << " shading " << step.shading << "\nscene " << hashFile(step.scene) << "\n";
+            const render::Scene scene = boundScene();
+            for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";
+            for (const auto& texel : scene.texels) d << "texel " << texel.name << " " << hashFile(texel.volume) << "\n";
+            for (std::size_t input : stages[self].inputs)
+                for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
+            return d.str();
+        };
+        r.run = [step, boundScene](Stage& self) {
+            render::RenderOptions o;
+            o.width = step.width;
+            o.height = step.height;
+            o.spp = step.spp;
+            o.lodBias = step.lodBias;
+            o.shading = step.shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
+            // Stages already run in parallel: each render keeps to the threads TBB gives it.
+            NullProgress quiet;
+            const render::RenderResult result = render::renderScene(boundScene(), o, quiet);
+            render::writeExr(result.image, self.outputs.at("image"));
+            render::writePng(result.image, self.outputs.at("preview"));
+            render::writeStatsJson(result.stats, self.outputs.at("stats"));
+            return Json::parse(readText(self.outputs.at("stats")));
+        };
+    }
+
+    for (const CompareStep& step : pipeline.compares) {
+        Stage s{"compare", step.name};
+        s.inputs = {renderIndex.at(step.a), renderIndex.at(step.b)};
+        s.outputs["metrics"] = root / "compares" / (step.name + ".json");
+        s.outputs["heatmap"] = root / "compares" / (step.name + ".diff.png");
+        const std::size_t self = stages.size();
+        stages.push_back(std::move(s));
+        Stage& c = stages.back();
+        c.describe = [&stages, self, header] {
+            const Stage& me = stages[self];
+            return header + "compare\n" + stages[me.inputs[0]].outputHashes.at("image") + "\n" +
+                   stages[me.inputs[1]].outputHashes.at("image") + "\n";
+        };
+        c.run = [&stages, step](Stage& self) {
+            const render::Image a = render::readExr(stages[self.inputs[0]].outputs.at("image"));
+            const render::Image b = render::readExr(stages[self.inputs[1]].outputs.at("image"));
+            if (a.width != b.width || a.height != b.height)
+                throw InputError(stages[self.inputs[1]].outputs.at("image"), "size differs from render '" + step.a + "'");
+            const render::ImageComparison m = render::compareImages(a, b);
+            render::writePng(render::errorHeatMap(a, b, m.worstError), self.outputs.at("heatmap"));
+            Json metrics = {{"a", step.a},       {"b", step.b},       {"rmse", m.rmse},
+                            {"ssim", m.ssim},     {"worst_error", m.worstError},
+                            {"psnr", std::isfinite(m.psnr) ? Json(m.psnr) : Json(nullptr)}};
+            writeFileAtomically(self.outputs.at("metrics"), metrics.dump(2) + "\n");
+            return metrics;
+        };
+    }
+
+    // Run wave by wave; a wave is a run of stages of one kind.
+    tbb::task_arena arena(options.jobs > 0 ? options.jobs : tbb::task_arena::automatic);
+    std::mutex logMutex;
+    std::size_t first = 0;
+    while (first < stages.size()) {
+        std::size_t last = first;
+        while (last < stages.size() && stages[last].kind == stages[first].kind) ++last;
+        arena.execute([&] {
+            tbb::parallel_for(first, last, [&](std::size_t i) {
+                Stage& stage = stages[i];
+                stage.record.kind = stage.kind;
+                stage.record.name = stage.name;
+                for (const auto& [role, path] : stage.outputs) stage.record.outputs.push_back(path);
+                for (std::size_t input : stage.inputs) {
+                    const Status upstream = stages[input].record.status;
+                    if (upstream == Status::Failed || upstream == Status::Skipped) {
+                        stage.record.status = Status::Skipped;
+                        stage.record.message = "not run: " + stages[input].kind + " '" + stages[input].name + "' " +
+                                               statusWord(upstream);
+                        std::lock_guard lock(logMutex);
+                        log("skipped " + stage.kind + " " + stage.name + " (" + stage.record.message + ")");
+                        return;
+                    }
+                }
+                try {
+                    stage.record.key = hashBytes(stage.describe());
+                    if (!options.force && upToDate(stage, root)) {
+                        stage.record.status = Status::Cached;
+                        std::lock_guard lock(logMutex);
+                        log("cached  " + stage.kind + " " + stage.name);
+                        return;
+                    }
+                    {
+                        std::lock_guard lock(logMutex);
+                        log("run     " + stage.kind + " " + stage.name);
+                    }
+                    const auto t = std::chrono::steady_clock::now();
+                    const Json details = stage.run(stage);
+                    stage.record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+                    for (const auto& [role, path] : stage.outputs) stage.outputHashes[role] = hashFile(path);
+                    writeManifest(stage, root, details);
+                    stage.record.detailsJson = details.dump();
+                    stage.record.status = Status::Ran;
+                } catch (const std::exception& e) {
+                    stage.record.status = Status::Failed;
+                    stage.record.message = e.what();
+                    std::lock_guard lock(logMutex);
+                    log("failed  " + stage.kind + " " + stage.name + ": " + e.what());
+                }
+            });
+        });
+        first = last;
+    }
+
+    RunReport report;
+    report.output = root;
+    for (const Stage& s : stages) report.stages.push_back(s.record);
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    writeReports(pipeline, report);
+    return report;
+}
+
+}  // namespace vtex::pipelines

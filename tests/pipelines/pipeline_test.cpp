@@ -1,0 +1,298 @@
+// `vtex run`: a small pipeline end to end, then the cache's promises — a second run is all
+// cached; touching an input re-runs exactly what depends on it; a corrupted artifact is
+// rebuilt; a run killed at any moment completes later without redoing finished stages; a
+// pipeline file with an error is refused before anything runs.
+#include "run_vtex.h"
+
+#include <vtex/core/error.h>
+#include <vtex/pipelines/pipeline.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <thread>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using vtex::pipelines::RunReport;
+using vtex::pipelines::StageRecord;
+using Status = StageRecord::Status;
+
+namespace {
+
+void writeText(const fs::path& file, const std::string& text) { std::ofstream(file, std::ios::binary) << text; }
+
+// A project folder: a 4×4 quad hill, a scene over it, a tiny OBJ source, and a pipeline with
+// two sources, two texels, two renders and a comparison.
+fs::path makeProject(const std::string& name) {
+    const fs::path dir = fs::path(VTEX_TEST_TMP) / "pipelines" / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::string hill;
+    for (int j = 0; j <= 4; ++j)
+        for (int i = 0; i <= 4; ++i)
+            hill += "v " + std::to_string(-1 + 0.5 * i) + " " + std::to_string(-1 + 0.5 * j) + " " +
+                    std::to_string(0.2 * ((i + j) % 2)) + "\n";
+    for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+            const int a = j * 5 + i + 1;
+            hill += "f " + std::to_string(a) + " " + std::to_string(a + 1) + " " + std::to_string(a + 6) + " " +
+                    std::to_string(a + 5) + "\n";
+        }
+    writeText(dir / "hill.obj", hill);
+    writeText(dir / "hill.toml", R"(
+[camera]
+position = [0.0, -3.0, 2.0]
+look_at = [0.0, 0.0, 0.0]
+fov_y = 40.0
+width = 48
+height = 36
+
+[[light]]
+type = "directional"
+direction = [-1.0, 0.5, -1.0]
+color = [3.0, 3.0, 3.0]
+
+[[texel]]
+name = "cover"
+volume = "bound-by-the-pipeline.vto"
+
+[[surface]]
+mesh = "hill.obj"
+texel = "cover"
+height = 0.25
+)");
+    // Two crossed quads in the unit cube.
+    writeText(dir / "cross.obj", "v 0.1 0.5 0.1\nv 0.9 0.5 0.1\nv 0.9 0.5 0.9\nv 0.1 0.5 0.9\n"
+                                 "v 0.5 0.1 0.1\nv 0.5 0.9 0.1\nv 0.5 0.9 0.9\nv 0.5 0.1 0.9\n"
+                                 "f 1 2 3 4\nf 5 6 7 8\n");
+    writeText(dir / "pipeline.toml", R"(
+[pipeline]
+output = "out"
+
+[[source]]
+name = "grass"
+pattern = "grass"
+count = 8
+
+[[source]]
+name = "cross"
+file = "cross.obj"
+
+[[texel]]
+name = "grass"
+source = "grass"
+resolution = 16
+
+[[texel]]
+name = "cross"
+source = "cross"
+resolution = 8
+filter = "neyret"
+
+[[render]]
+name = "grass-hill"
+scene = "hill.toml"
+texels = { cover = "grass" }
+
+[[render]]
+name = "cross-hill"
+scene = "hill.toml"
+texels = { cover = "cross" }
+
+[[compare]]
+name = "grass-vs-cross"
+a = "grass-hill"
+b = "cross-hill"
+)");
+    return dir;
+}
+
+RunReport run(const fs::path& dir, bool force = false) {
+    vtex::pipelines::RunOptions options;
+    options.force = force;
+    return vtex::pipelines::runPipeline(vtex::pipelines::loadPipeline(dir / "pipeline.toml"), options);
+}
+
+// "kind name" → status.
+std::map<std::string, Status> statuses(const RunReport& report) {
+    std::map<std::string, Status> out;
+    for (const auto& s : report.stages) out[s.kind + " " + s.name] = s.status;
+    return out;
+}
+
+std::set<std::string> stagesWith(const RunReport& report, Status status) {
+    std::set<std::string> out;
+    for (const auto& s : report.stages)
+        if (s.status == status) out.insert(s.kind + " " + s.name);
+    return out;
+}
+
+TEST(Pipeline, RunsEndToEndThenEverythingIsCached) {
+    const fs::path dir = makeProject("end_to_end");
+    const RunReport first = run(dir);
+    ASSERT_TRUE(first.succeeded());
+    EXPECT_EQ(first.stages.size(), 9u);
+    EXPECT_EQ(stagesWith(first, Status::Ran).size(), 9u);
+    for (const char* file : {"out/report.json", "out/report.html", "out/builds/grass.vto", "out/renders/grass-hill.exr",
+                             "out/renders/cross-hill.png", "out/compares/grass-vs-cross.json"})
+        EXPECT_TRUE(fs::is_regular_file(dir / file)) << file;
+    const auto report = nlohmann::json::parse(vtex::test::readText(dir / "out/report.json"));
+    EXPECT_TRUE(report["succeeded"].get<bool>());
+    const auto metrics = nlohmann::json::parse(vtex::test::readText(dir / "out/compares/grass-vs-cross.json"));
+    EXPECT_GT(metrics["rmse"].get<double>(), 0) << "two different texels render differently";
+
+    const RunReport second = run(dir);
+    ASSERT_TRUE(second.succeeded());
+    EXPECT_EQ(stagesWith(second, Status::Cached).size(), 9u);
+
+    const RunReport forced = run(dir, true);
+    EXPECT_EQ(stagesWith(forced, Status::Ran).size(), 9u);
+}
+
+TEST(Pipeline, TouchingAnInputRerunsExactlyWhatDependsOnIt) {
+    const fs::path dir = makeProject("touch");
+    ASSERT_TRUE(run(dir).succeeded());
+
+    // A new source file: its chain and the comparison re-run; the grass chain stays cached.
+    writeText(dir / "cross.obj", vtex::test::readText(dir / "cross.obj") + "f 1 2 6\n");
+    RunReport report = run(dir);
+    ASSERT_TRUE(report.succeeded());
+    EXPECT_EQ(stagesWith(report, Status::Ran),
+              (std::set<std::string>{"source cross", "sample cross", "build cross", "render cross-hill",
+                                     "compare grass-vs-cross"}));
+
+    // A build parameter: the sample stays cached, the build and what reads it re-run.
+    std::string pipeline = vtex::test::readText(dir / "pipeline.toml");
+    pipeline.replace(pipeline.find("filter = \"neyret\""), 17, "filter = \"sggx\"");
+    writeText(dir / "pipeline.toml", pipeline);
+    report = run(dir);
+    EXPECT_EQ(stagesWith(report, Status::Ran),
+              (std::set<std::string>{"build cross", "render cross-hill", "compare grass-vs-cross"}));
+
+    // A comment in the scene: both renders re-run, but their images are the same bytes, so the
+    // comparison (keyed by image content) stays cached.
+    writeText(dir / "hill.toml", vtex::test::readText(dir / "hill.toml") + "\n# an edit\n");
+    report = run(dir);
+    EXPECT_EQ(stagesWith(report, Status::Ran), (std::set<std::string>{"render grass-hill", "render cross-hill"}));
+
+    // A dimmer light changes the images: the comparison re-runs too.
+    std::string scene = vtex::test::readText(dir / "hill.toml");
+    scene.replace(scene.find("color = [3.0, 3.0, 3.0]"), 23, "color = [2.0, 2.0, 2.0]");
+    writeText(dir / "hill.toml", scene);
+    report = run(dir);
+    EXPECT_EQ(stagesWith(report, Status::Ran),
+              (std::set<std::string>{"render grass-hill", "render cross-hill", "compare grass-vs-cross"}));
+}
+
+TEST(Pipeline, ACorruptedCachedArtifactIsRebuilt) {
+    const fs::path dir = makeProject("corrupt");
+    ASSERT_TRUE(run(dir).succeeded());
+    {
+        std::fstream file(dir / "out/builds/grass.vto", std::ios::in | std::ios::out | std::ios::binary);
+        file.seekp(40);
+        file.put('\x7f');
+    }
+    const RunReport report = run(dir);
+    ASSERT_TRUE(report.succeeded());
+    // The rebuilt octree is the same content as before, so nothing downstream re-runs.
+    EXPECT_EQ(stagesWith(report, Status::Ran), (std::set<std::string>{"build grass"}));
+    // And a deleted one too.
+    fs::remove(dir / "out/renders/cross-hill.exr");
+    EXPECT_EQ(stagesWith(run(dir), Status::Ran), (std::set<std::string>{"render cross-hill"}));
+}
+
+TEST(Pipeline, AFailedStageStopsWhatDependsOnItOnly) {
+    const fs::path dir = makeProject("failure");
+    // A source that ingest refuses: an OBJ face with an index out of range.
+    writeText(dir / "cross.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    const RunReport report = run(dir);
+    EXPECT_FALSE(report.succeeded());
+    const auto s = statuses(report);
+    EXPECT_EQ(s.at("source cross"), Status::Failed);
+    EXPECT_EQ(s.at("sample cross"), Status::Skipped);
+    EXPECT_EQ(s.at("render cross-hill"), Status::Skipped);
+    EXPECT_EQ(s.at("compare grass-vs-cross"), Status::Skipped);
+    EXPECT_EQ(s.at("render grass-hill"), Status::Ran) << "independent stages finish";
+    // The CLI says which stage failed and exits non-zero.
+    const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string(), "--quiet"});
+    EXPECT_NE(r.exitStatus, 0);
+    EXPECT_NE(r.err.find("source 'cross' failed"), std::string::npos) << r.err;
+}
+
+TEST(Pipeline, AKilledRunCompletesLaterWithoutRedoingFinishedStages) {
+    // Kill the CLI with SIGKILL at several moments; each time, the next run must succeed and
+    // report as cached every stage whose manifest existed before it started.
+    int partialRuns = 0;
+    for (int delayMs : {10, 40, 80, 120, 170, 230, 300, 450}) {
+        const fs::path dir = makeProject("killed_" + std::to_string(delayMs));
+        const pid_t child = fork();
+        ASSERT_GE(child, 0);
+        if (child == 0) {
+            const std::string pipeline = (dir / "pipeline.toml").string();
+            execl(VTEX_BINARY, VTEX_BINARY, "run", pipeline.c_str(), "--quiet", static_cast<char*>(nullptr));
+            _exit(127);
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(delayMs));
+        kill(child, SIGKILL);
+        int status = 0;
+        waitpid(child, &status, 0);
+
+        std::set<std::string> finished;
+        for (const char* folder : {"sources", "samples", "builds", "renders", "compares"}) {
+            if (!fs::is_directory(dir / "out" / folder)) continue;
+            for (const auto& entry : fs::directory_iterator(dir / "out" / folder)) {
+                const std::string file = entry.path().filename().string();
+                const auto suffix = file.find(".manifest.json");
+                // Hidden files are the atomic writer's temporaries, left by the kill.
+                if (suffix != std::string::npos && file.front() != '.')
+                    finished.insert(std::string(folder).substr(0, std::string(folder).size() - 1) + " " +
+                                    file.substr(0, suffix));
+            }
+        }
+        partialRuns += !finished.empty() && finished.size() < 9;
+        const RunReport report = run(dir);
+        ASSERT_TRUE(report.succeeded()) << "after a kill at " << delayMs << " ms";
+        for (const auto& entry : fs::recursive_directory_iterator(dir / "out"))
+            EXPECT_NE(entry.path().filename().string().front(), '.') << "stale temporary " << entry.path();
+        for (const auto& stage : finished)
+            EXPECT_EQ(statuses(report).at(stage), Status::Cached) << stage << " after a kill at " << delayMs << " ms";
+    }
+    EXPECT_GE(partialRuns, 1) << "no kill landed between the first and the last stage: the test proved nothing";
+}
+
+TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {
+    const fs::path dir = makeProject("refused");
+    const std::string good = vtex::test::readText(dir / "pipeline.toml");
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"resolution = 16", "resolution = 12"},               // texel[0].resolution
+        {"source = \"cross\"", "source = \"nowhere\""},       // texel[1].source
+        {"file = \"cross.obj\"", "file = \"missing.obj\""},   // source[1].file
+        {"b = \"cross-hill\"", "b = 7"},                      // compare[0].b
+        {"texels = { cover = \"grass\" }", "texels = { cover = \"moss\" }"},
+        {"pattern = \"grass\"", "pattern = \"grass\"\nfile = \"cross.obj\""},
+        {"[pipeline]", "[pipeline"},                          // TOML syntax
+    };
+    const std::vector<std::string> keys = {"texel[0].resolution", "texel[1].source", "source[1].file",
+                                           "compare[0].b", "render[0].texels.cover", "source[0]", "line 2"};
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+        std::string bad = good;
+        bad.replace(bad.find(cases[i].first), cases[i].first.size(), cases[i].second);
+        writeText(dir / "pipeline.toml", bad);
+        const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string()});
+        EXPECT_EQ(r.exitStatus, 3) << cases[i].second << "\n" << r.err;
+        EXPECT_NE(r.err.find(keys[i]), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("pipeline.toml"), std::string::npos) << r.err;
+        EXPECT_EQ(vtex::test::lineCount(r.err), 1u) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "out")) << "nothing may run: " << cases[i].second;
+    }
+}
+
+}  // namespace
