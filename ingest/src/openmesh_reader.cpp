@@ -68,6 +68,11 @@ private:
     std::size_t mAt = 0;
 };
 
+std::string_view trimmed(std::string_view s) {
+    while (!s.empty() && isSpace(s.back())) s.remove_suffix(1);
+    return s;
+}
+
 bool parseCount(std::string_view token, std::uint64_t& value) {
     const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
     return ec == std::errc() && end == token.data() + token.size();
@@ -93,10 +98,25 @@ void precheckOff(std::string_view bytes, const fs::path& file, const IngestOptio
                                    std::to_string(available) + " bytes can hold");
     if (faces > options.maxTriangles)
         throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " faces (see --max-triangles)");
-    // Vertex records are one per line; each face record starts with its corner count, which
-    // OpenMesh uses to size a vector: check it against the vertex count and the line.
-    for (std::uint64_t v = 0; v < vertices; ++v)
-        if (tokens.line().empty() && tokens.done()) throw InputError(file, "truncated OFF: missing vertices");
+    // Every record is checked token by token: vertex lines hold numbers only; face lines a
+    // corner count (which OpenMesh uses to size a vector), that many vertex indices in range,
+    // then numbers (a colour). OpenMesh's ASCII OFF reader loops forever on a token it cannot
+    // extract (found by the fuzzer), so it only ever sees records that passed this check.
+    auto isNumber = [](std::string_view token) {
+        double value;
+        if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+        const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+        return (ec == std::errc() || ec == std::errc::result_out_of_range) && end == token.data() + token.size();
+    };
+    for (std::uint64_t v = 0; v < vertices; ++v) {
+        const std::string_view record = tokens.line();
+        if (record.empty() && tokens.done()) throw InputError(file, "truncated OFF: missing vertices");
+        Tokens fields(record);
+        int count = 0;
+        for (std::string_view t = fields.next(); !t.empty(); t = fields.next(), ++count)
+            if (!isNumber(t)) throw InputError(file, "OFF vertex " + std::to_string(v) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
+        if (count < 3) throw InputError(file, "OFF vertex " + std::to_string(v) + ": fewer than 3 coordinates");
+    }
     std::uint64_t triangles = 0;
     for (std::uint64_t f = 0; f < faces; ++f) {
         std::string_view record = tokens.line();
@@ -108,6 +128,13 @@ void precheckOff(std::string_view bytes, const fs::path& file, const IngestOptio
         if (corners > vertices || corners > record.size())
             throw InputError(file, "OFF face " + std::to_string(f) + " claims " + std::to_string(corners) +
                                        " corners, more than the file holds");
+        for (std::uint64_t k = 0; k < corners; ++k) {
+            std::uint64_t index = 0;
+            if (!parseCount(face.next(), index) || index >= vertices)
+                throw InputError(file, "OFF face " + std::to_string(f) + ": bad or out-of-range vertex index");
+        }
+        for (std::string_view t = face.next(); !t.empty(); t = face.next())
+            if (!isNumber(t)) throw InputError(file, "OFF face " + std::to_string(f) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
         triangles += corners >= 3 ? corners - 2 : 0;
         if (triangles > options.maxTriangles)
             throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " triangles (see --max-triangles)");
@@ -152,37 +179,74 @@ std::uint64_t readPlyCount(const unsigned char* p, int size, bool bigEndian, std
     return v;
 }
 
-void precheckPly(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
-    const std::size_t headerEnd = bytes.find("end_header");
-    if (bytes.substr(0, 3) != "ply" || headerEnd == std::string_view::npos)
-        throw InputError(file, "not a PLY file (no 'ply' magic or no end_header)");
-    std::size_t dataStart = bytes.find('\n', headerEnd);
-    if (dataStart == std::string_view::npos) throw InputError(file, "truncated PLY: nothing after end_header");
-    ++dataStart;
+// Returns the file with its header rewritten canonically (known lines only, '\n' endings):
+// OpenMesh never parses the original header.
+std::string precheckPly(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
+    // OpenMesh's PLY header parser loops forever on a header it does not expect (the fuzzer
+    // found two: a stray line with '\r', and "end_header" glued to a property name). So the
+    // header is held to the grammar here (printable ASCII, known keywords with their token
+    // counts, "end_header" alone on its line), lines that are not PLY keywords are dropped
+    // as comments (Blender 2.4 wrote such lines), and OpenMesh reads the rewritten header.
+    if (bytes.substr(0, 4) != "ply\n" && bytes.substr(0, 5) != "ply\r\n")
+        throw InputError(file, "not a PLY file (no 'ply' magic line)");
+    std::size_t headerEnd = std::string_view::npos;
+    for (std::size_t at = bytes.find("\nend_header"); at != std::string_view::npos; at = bytes.find("\nend_header", at + 1)) {
+        const std::size_t after = at + 11;
+        if (after < bytes.size() && (bytes[after] == '\n' || (bytes[after] == '\r' && after + 1 < bytes.size() && bytes[after + 1] == '\n'))) {
+            headerEnd = at + 1;
+            break;
+        }
+    }
+    if (headerEnd == std::string_view::npos) throw InputError(file, "PLY: no end_header line");
+    std::size_t dataStart = bytes.find('\n', headerEnd) + 1;
     std::string format;
     std::vector<PlyElement> elements;
+    std::string canonical;
     std::string_view header = bytes.substr(0, headerEnd);
+    for (char c : header)
+        if (!(c == '\n' || c == '\r' || c == '\t' || (c >= 0x20 && c < 0x7f)))
+            throw InputError(file, "PLY header: not printable ASCII");
     for (std::size_t at = 0; at < header.size();) {
         std::size_t end = header.find('\n', at);
         if (end == std::string_view::npos) end = header.size();
-        Tokens line(header.substr(at, end - at));
+        const std::string_view text = header.substr(at, end - at);
         at = end + 1;
-        const std::string_view keyword = line.next();
+        Tokens line(text);
+        std::vector<std::string_view> tokens;
+        for (std::string_view t = line.next(); !t.empty(); t = line.next()) tokens.push_back(t);
+        if (tokens.empty()) continue;
+        const std::string_view keyword = tokens[0];
+        const bool known = keyword == "ply" || keyword == "format" || keyword == "comment" || keyword == "obj_info" ||
+                           keyword == "element" || keyword == "property";
+        if (!known) continue;
+        if (keyword != "comment" && keyword != "obj_info") {
+            for (const auto& t : tokens) canonical.append(t).push_back(' ');
+            canonical.back() = '\n';
+        }
+        const bool ok = keyword == "ply" ? tokens.size() == 1
+                      : keyword == "format" ? tokens.size() == 3
+                      : keyword == "comment" || keyword == "obj_info" ? true
+                      : keyword == "element" ? tokens.size() == 3
+                      : keyword == "property" ? (tokens.size() == 3 || (tokens.size() == 5 && tokens[1] == "list"))
+                      : false;
+        if (!ok) throw InputError(file, "PLY header: malformed line '" + std::string(trimmed(text).substr(0, 40)) + "'");
+        Tokens rest(text);
+        rest.next();
         if (keyword == "format") {
-            format = std::string(line.next());
+            format = std::string(rest.next());
         } else if (keyword == "element") {
             PlyElement element;
-            element.name = std::string(line.next());
-            if (!parseCount(line.next(), element.count)) throw InputError(file, "PLY header: bad element count");
+            element.name = std::string(rest.next());
+            if (!parseCount(rest.next(), element.count)) throw InputError(file, "PLY header: bad element count");
             elements.push_back(element);
         } else if (keyword == "property") {
             if (elements.empty()) throw InputError(file, "PLY header: property before any element");
             PlyProperty property;
-            const std::string_view type = line.next();
+            const std::string_view type = rest.next();
             if (type == "list") {
-                property.countType = std::string(line.next());
+                property.countType = std::string(rest.next());
                 property.countSize = plyTypeSize(property.countType);
-                property.size = plyTypeSize(line.next());
+                property.size = plyTypeSize(rest.next());
                 if (property.countSize == 0 || property.countSize == 8 || property.size == 0 ||
                     property.countType == "float" || property.countType == "float32")
                     throw InputError(file, "PLY header: bad list property types");
@@ -232,7 +296,7 @@ void precheckPly(std::string_view bytes, const fs::path& file, const IngestOptio
                     for (std::uint64_t i = 0; i < count; ++i) fields.next();
                 }
             }
-        return;
+        return canonical + "end_header\n" + std::string(bytes.substr(dataStart));
     }
     const auto* data = reinterpret_cast<const unsigned char*>(bytes.data()) + dataStart;
     std::uint64_t at = 0;
@@ -252,6 +316,7 @@ void precheckPly(std::string_view bytes, const fs::path& file, const IngestOptio
                                                ": list of " + std::to_string(count) + " items runs past the end");
                 at += count * std::uint64_t(p.size);
             }
+    return canonical + "end_header\n" + std::string(bytes.substr(dataStart));
 }
 
 // Binary STL: an 80-byte header, a 32-bit triangle count, 50 bytes per triangle, exactly.
@@ -277,18 +342,19 @@ void precheckStl(std::string_view bytes, const fs::path& file, const IngestOptio
 
 }  // namespace
 
-void precheckOpenMeshInput(std::string_view bytes, const std::string& format, const fs::path& file,
-                           const IngestOptions& options) {
+std::string precheckOpenMeshInput(std::string_view bytes, const std::string& format, const fs::path& file,
+                                  const IngestOptions& options) {
     if (bytes.empty()) throw InputError(file, "empty file");
     if (format == "off") precheckOff(bytes, file, options);
-    else if (format == "ply") precheckPly(bytes, file, options);
+    else if (format == "ply") return precheckPly(bytes, file, options);
     else if (format == "stl") precheckStl(bytes, file, options);
     else throw InputError(file, "unknown format '" + format + "'");
+    return std::string(bytes);
 }
 
 RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format, const fs::path& file,
                          const IngestOptions& options) {
-    precheckOpenMeshInput(bytes, format, file, options);
+    const std::string checked = precheckOpenMeshInput(bytes, format, file, options);
 
     // OpenMesh reports through omerr()/omlog(); libraries never print.
     omerr().disable();
@@ -299,7 +365,7 @@ RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format, cons
     mesh.request_vertex_normals();
     OpenMesh::IO::Options readOptions = OpenMesh::IO::Options::VertexNormal;
     if (format == "stl" && isBinaryStl(bytes)) readOptions += OpenMesh::IO::Options::Binary;
-    std::istringstream stream{std::string(bytes)};
+    std::istringstream stream{checked};
     bool ok = false;
     try {
         ok = OpenMesh::IO::read_mesh(mesh, stream, "." + format, readOptions);

@@ -256,6 +256,26 @@ TEST(Malformed, FuzzStlTextThatIsNotSolidHangs) {
                   "neither an ASCII STL");
 }
 
+TEST(Malformed, FuzzPlyHeaderGarbageHangs) {
+    // A stray header line sent OpenMesh's PLY header parser into an endless loop; OpenMesh now
+    // only reads a rewritten header, so the stray line is dropped and the (face-less) file is
+    // refused for what it is.
+    expectRefused("fuzz_hang.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                  "ppop\r\nend_header\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n",
+                  "no faces");
+    expectRefused("fuzz_hang2.ply",
+                  "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                  "property float z\nelement face 12\nproperty list uchar int vertex_indices\xbc" "end_header\n" + std::string(8, '\0'),
+                  "PLY");
+}
+
+TEST(Malformed, FuzzOffGarbageTokenHangs) {
+    // A token OpenMesh's ASCII OFF reader cannot extract made it loop forever.
+    expectRefused("fuzz_hang.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2=v\n", "OFF face 0");
+    expectRefused("fuzz_hang2.off", "OFF\n3 1 0\n0 0 0\n0.5000.0 0 0\n0 1 0\n3 0 1 2\n", "OFF vertex 1: bad number");
+}
+
 TEST(Malformed, MaxTriangles) {
     ingest::IngestOptions options;
     options.maxTriangles = 1;
