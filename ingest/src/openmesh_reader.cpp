@@ -234,6 +234,8 @@ std::string precheckPly(std::string_view bytes, const fs::path& file, const Inge
         rest.next();
         if (keyword == "format") {
             format = std::string(rest.next());
+            // OpenMesh loops on a version it cannot parse (found by the fuzzer).
+            if (rest.next() != "1.0") throw InputError(file, "PLY header: format version must be 1.0");
         } else if (keyword == "element") {
             PlyElement element;
             element.name = std::string(rest.next());
@@ -268,7 +270,13 @@ std::string precheckPly(std::string_view bytes, const fs::path& file, const Inge
     for (const auto& element : elements) {
         std::uint64_t record = 0;
         for (const auto& p : element.properties) record += ascii ? 2 : std::uint64_t(p.countSize ? p.countSize : p.size);
-        if (record == 0) continue;
+        // A record takes at least a byte: an element of many empty records would only make the
+        // walk below spin (found by the fuzzer: 10^12 records of no property).
+        if (record == 0) {
+            if (element.count > 0)
+                throw InputError(file, "PLY header: element '" + element.name + "' has records but no properties");
+            continue;
+        }
         if (element.count > available / record || minimum + element.count * record > available)
             throw InputError(file, "PLY header claims " + std::to_string(element.count) + " '" + element.name +
                                        "' elements, more than the file's bytes can hold");

@@ -268,6 +268,11 @@ TEST(Malformed, FuzzPlyHeaderGarbageHangs) {
                   "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
                   "property float z\nelement face 12\nproperty list uchar int vertex_indices\xbc" "end_header\n" + std::string(8, '\0'),
                   "PLY");
+    expectRefused("fuzz_hang3.ply",
+                  "ply\nformat binary_little_endian nerated\nelement vertex 1\nproperty float x\nend_header\n" + std::string(4, '\0'),
+                  "format version");
+    expectRefused("fuzz_hang4.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\npropervy float x\nend_header\n",
+                  "no properties");
 }
 
 TEST(Malformed, FuzzOffGarbageTokenHangs) {
