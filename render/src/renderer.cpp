@@ -12,6 +12,7 @@
 #include <vtex/render/shading.h>
 #include <vtex/render/texel_march.h>
 
+#include "footprint.h"
 #include "march.h"
 #include "tracer.h"
 
@@ -285,12 +286,8 @@ private:
 
     static Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
 
-    // World length per reference unit around r: the cube root of the Jacobian of the map from
-    // tiled reference space to the world (a geometric mean over the three directions).
     static double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
-        const double det = std::abs(cell.jacobian(r).determinant()) / (s.repeatU * s.repeatV);
-        const double scale = std::cbrt(det);
-        return scale > 0 && std::isfinite(scale) ? scale : cell.size() / std::max(s.repeatU, s.repeatV);
+        return detail::localScale(cell, r, s.repeatU, s.repeatV);
     }
 
     void marchSpan(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, double tIn,
@@ -442,23 +439,11 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
         surfaces.push_back(s);
         const auto mesh = def.meshData ? def.meshData : std::make_shared<const ingest::QuadMesh>(ingest::loadBaseMesh(def.mesh));
         for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
-            const auto& q = mesh->quads[f];
             Prim prim;
             prim.surface = int(si);
             prim.face = int(f);
-            // QuadMesh corners run counter-clockwise: P00, P10, P11, P01.
-            const std::uint32_t order[4] = {q[0], q[1], q[3], q[2]};
-            bool valid = true;
-            for (int c = 0; c < 4; ++c) {
-                if (order[c] >= mesh->positions.size()) {
-                    valid = false;
-                    break;
-                }
-                prim.p[std::size_t(c)] = mesh->positions[order[c]].cast<double>();
-                prim.n[std::size_t(c)] = order[c] < mesh->normals.size() ? mesh->normals[order[c]].cast<double>() : Vec3(0, 0, 1);
-                if (!prim.p[std::size_t(c)].allFinite() || !prim.n[std::size_t(c)].allFinite()) valid = false;
-            }
-            if (!valid) throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
+            if (!detail::baseFaceCorners(*mesh, f, prim.p, prim.n))
+                throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
             if (def.texel) {
                 prim.textured = true;
                 prim.cell = TrilinearCell(prim.p, prim.n, def.height, def.placement == Placement::Under);
@@ -477,9 +462,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
     const Vec3 up = right.cross(forward);
     const double tanHalf = std::tan(cam.fovY * std::numbers::pi / 360);
     const double aspect = double(width) / double(height);
-    // The pixel cone: its width per unit distance (at the image centre), split among the
-    // strata of a pixel.
-    const double coneSpread = 2 * tanHalf / double(height) / double(strata);
+    const double coneSpread = detail::coneSpread(cam.fovY, height, strata);
 
     Integrator integrator(scene, options, tracer, surfaces, texels, coneSpread);
     const auto renderStart = std::chrono::steady_clock::now();

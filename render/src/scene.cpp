@@ -3,6 +3,7 @@
 #include <vtex/render/scene.h>
 
 #include <vtex/core/error.h>
+#include <vtex/core/toml_reader.h>
 
 #include <Eigen/Geometry>
 #include <toml++/toml.h>
@@ -17,68 +18,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class Reader {
+// The scene's own value kinds on top of the shared checked TOML reader.
+class Reader : public TomlReader {
 public:
-    Reader(const fs::path& file, std::vector<std::string>& warnings) : mFile(file), mWarnings(warnings) {}
-
-    [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
-        throw InputError(mFile, problem, key);
-    }
-
-    // Warns about keys of `table` that are not in `known`.
-    void checkKeys(const toml::table& table, const std::string& path,
-                   std::initializer_list<std::string_view> known) {
-        for (const auto& [key, value] : table) {
-            bool found = false;
-            for (auto k : known) found = found || key.str() == k;
-            if (!found) {
-                const std::string full = path.empty() ? std::string(key.str()) : path + "." + std::string(key.str());
-                mWarnings.push_back(mFile.string() + ": unknown key '" + full + "' ignored");
-            }
-        }
-    }
-
-    double number(const toml::node& node, const std::string& key) const {
-        if (auto v = node.as_floating_point()) {
-            const double x = v->get();
-            if (!std::isfinite(x)) fail(key, "must be a finite number");
-            return x;
-        }
-        if (auto v = node.as_integer()) return double(v->get());
-        fail(key, "must be a number");
-    }
-
-    double number(const toml::table& table, const std::string& path, std::string_view name,
-                  std::optional<double> fallback, double min, double max, bool openMin = false) const {
-        const std::string key = join(path, name);
-        const toml::node* node = table.get(name);
-        if (!node) {
-            if (!fallback) fail(key, "missing key");
-            return *fallback;
-        }
-        const double x = number(*node, key);
-        if (x < min || x > max || (openMin && x == min)) {
-            std::ostringstream s;
-            s << "must be " << (openMin ? "in (" : "in [") << min << ", " << max << "], got " << x;
-            fail(key, s.str());
-        }
-        return x;
-    }
-
-    int integer(const toml::table& table, const std::string& path, std::string_view name,
-                std::optional<int> fallback, int min, int max) const {
-        const std::string key = join(path, name);
-        const toml::node* node = table.get(name);
-        if (!node) {
-            if (!fallback) fail(key, "missing key");
-            return *fallback;
-        }
-        const auto v = node->as_integer();
-        if (!v) fail(key, "must be an integer");
-        if (v->get() < min || v->get() > max)
-            fail(key, "must be in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
-        return int(v->get());
-    }
+    using TomlReader::TomlReader;
 
     template <int N>
     Eigen::Matrix<double, N, 1> vector(const toml::table& table, const std::string& path, std::string_view name,
@@ -101,45 +44,6 @@ public:
         return out;
     }
 
-    std::string string(const toml::table& table, const std::string& path, std::string_view name,
-                       std::optional<std::string> fallback) const {
-        const std::string key = join(path, name);
-        const toml::node* node = table.get(name);
-        if (!node) {
-            if (!fallback) fail(key, "missing key");
-            return *fallback;
-        }
-        const auto v = node->as_string();
-        if (!v) fail(key, "must be a string");
-        return v->get();
-    }
-
-    const toml::table* subtable(const toml::table& table, const std::string& path, std::string_view name,
-                                bool required) const {
-        const toml::node* node = table.get(name);
-        if (!node) {
-            if (required) fail(join(path, name), "missing table");
-            return nullptr;
-        }
-        const auto t = node->as_table();
-        if (!t) fail(join(path, name), "must be a table");
-        return t;
-    }
-
-    std::vector<const toml::table*> arrayOfTables(const toml::table& table, std::string_view name) const {
-        std::vector<const toml::table*> out;
-        const toml::node* node = table.get(name);
-        if (!node) return out;
-        const auto array = node->as_array();
-        if (!array) fail(std::string(name), "must be an array of tables ([[" + std::string(name) + "]])");
-        for (std::size_t i = 0; i < array->size(); ++i) {
-            const auto t = array->get(i)->as_table();
-            if (!t) fail(std::string(name) + "[" + std::to_string(i) + "]", "must be a table");
-            out.push_back(t);
-        }
-        return out;
-    }
-
     Material material(const toml::table& parent, const std::string& path, const Material& defaults) {
         const toml::table* t = subtable(parent, path, "material", false);
         if (!t) return defaults;
@@ -152,20 +56,6 @@ public:
         m.shininess = number(*t, p, "shininess", defaults.shininess, 0, 1e6);
         return m;
     }
-
-    fs::path resolve(const std::string& relative) const {
-        const fs::path p(relative);
-        if (p.is_absolute()) return p;
-        return mFile.parent_path() / p;
-    }
-
-    static std::string join(const std::string& path, std::string_view name) {
-        return path.empty() ? std::string(name) : path + "." + std::string(name);
-    }
-
-private:
-    fs::path mFile;
-    std::vector<std::string>& mWarnings;
 };
 
 }  // namespace
@@ -173,15 +63,8 @@ private:
 Scene parseScene(std::string_view text, const std::filesystem::path& file) {
     Scene scene;
     scene.file = file;
-    toml::table root;
-    try {
-        root = toml::parse(text, file.string());
-    } catch (const toml::parse_error& e) {
-        std::ostringstream where;
-        where << "line " << e.source().begin.line << ", column " << e.source().begin.column;
-        throw InputError(file, "TOML syntax error: " + std::string(e.description()), where.str());
-    }
     Reader r(file, scene.warnings);
+    const toml::table root = r.parse(text);
     r.checkKeys(root, "", {"camera", "light", "texel", "surface"});
 
     // Camera.

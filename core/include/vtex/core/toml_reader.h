@@ -33,7 +33,7 @@ public:
         } catch (const toml::parse_error& e) {
             const auto& where = e.source().begin;
             fail("line " + std::to_string(where.line) + ", column " + std::to_string(where.column),
-                 std::string(e.description()));
+                 "TOML syntax error: " + std::string(e.description()));
         }
     }
 
