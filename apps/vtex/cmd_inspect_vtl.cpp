@@ -1,5 +1,6 @@
 // `vtex inspect leaves.vtl [--json]`: what a sampled volume holds.
 #include "cli.h"
+#include "inspect_checksums.h"
 
 #include <vtex/core/error.h>
 #include <vtex/octree/volume.h>
@@ -9,54 +10,19 @@
 #include <cstdio>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 namespace vtex::cli {
 namespace {
 
-std::string number(double v) {
-    if (!std::isfinite(v)) return "null";
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.9g", v);
-    return buffer;
-}
-
-std::string quoted(const std::string& s) {
-    std::string out = "\"";
-    for (char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
-        if (static_cast<unsigned char>(c) < 0x20) {
-            char esc[8];
-            std::snprintf(esc, sizeof esc, "\\u%04x", c);
-            out += esc;
-        } else {
-            out += c;
-        }
-    }
-    return out + "\"";
-}
-
-std::string checksumsJson(const octree::FileCheck& check) {
-    std::string out = "{\"valid\": " + std::string(check.problem.empty() ? "true" : "false") +
-                      ", \"version\": " + std::to_string(check.version) + ", \"problem\": " +
-                      (check.problem.empty() ? "null" : quoted(check.problem)) + ", \"sections\": [";
-    for (std::size_t i = 0; i < check.sections.size(); ++i) {
-        const auto& s = check.sections[i];
-        out += (i ? ", " : "") + std::string("{\"tag\": ") + quoted(s.tag) + ", \"bytes\": " + std::to_string(s.size) +
-               ", \"checksum\": " + (s.checksumOk ? "\"ok\"" : "\"mismatch\"") + "}";
-    }
-    return out + "]}";
-}
-
-void printChecksums(const octree::FileCheck& check, std::ostream& out) {
-    out << "checksums:";
-    for (const auto& s : check.sections) out << "  " << s.tag << " (" << s.size << " B) " << (s.checksumOk ? "ok" : "MISMATCH");
-    out << (check.problem.empty() ? "" : "  -- " + check.problem) << '\n';
-}
+// JSON has no NaN or infinity.
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 void inspectVtl(const std::filesystem::path& file, bool json, std::ostream& out) {
     const std::string bytes = octree::readFileBytes(file);
     const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTL", 8), octree::kVtlVersion);
     if (!check.problem.empty()) {
-        if (json) out << "{\"file\": " << quoted(file.string()) << ", \"checksums\": " << checksumsJson(check) << "}\n";
+        if (json) out << nlohmann::json{{"file", file.string()}, {"checksums", checksumsJson(check)}}.dump() << '\n';
         else printChecksums(check, out);
     }
     const octree::SparseVolume volume = octree::parseVtl(bytes, file);  // throws on any problem
@@ -84,20 +50,29 @@ void inspectVtl(const std::filesystem::path& file, bool json, std::ostream& out)
     }
     const double n3 = std::ldexp(1.0, 3 * int(L));
     if (json) {
-        out << "{\"file\": " << quoted(file.string()) << ", \"kind\": \"vtl\", \"version\": " << check.version
-            << ", \"resolution\": " << info.resolution() << ", \"levels\": " << L + 1
-            << ", \"cyclic\": " << (info.cyclic ? "true" : "false") << ", \"scale\": " << number(info.scale)
-            << ", \"offset\": [" << number(info.offset[0]) << ", " << number(info.offset[1]) << ", "
-            << number(info.offset[2]) << "], \"source_triangles\": " << info.sourceTriangles
-            << ", \"source_area\": " << number(info.sourceArea) << ", \"surface_voxels\": " << surface
-            << ", \"sampled_area\": " << number(surfaceArea) << ", \"solid_blocks\": " << solidBlocks
-            << ", \"solid_voxels\": " << number(solidVoxels) << ", \"solid_density\": " << number(info.solidDensity)
-            << ", \"mean_density\": " << number(mass / n3) << ", \"occupied_bounds\": ";
-        if (volume.blocks.empty()) out << "null";
-        else
-            out << "[[" << lo[0] << ", " << lo[1] << ", " << lo[2] << "], [" << hi[0] << ", " << hi[1] << ", " << hi[2] << "]]";
-        out << ", \"fit_error\": {\"mean\": " << number(info.fitError.mean) << ", \"max\": " << number(info.fitError.max)
-            << ", \"samples\": " << info.fitError.samples << "}, \"checksums\": " << checksumsJson(check) << "}\n";
+        nlohmann::json j = {{"file", file.string()},
+                            {"kind", "vtl"},
+                            {"version", check.version},
+                            {"resolution", info.resolution()},
+                            {"levels", L + 1},
+                            {"cyclic", info.cyclic},
+                            {"scale", number(info.scale)},
+                            {"offset", {number(info.offset[0]), number(info.offset[1]), number(info.offset[2])}},
+                            {"source_triangles", info.sourceTriangles},
+                            {"source_area", number(info.sourceArea)},
+                            {"surface_voxels", surface},
+                            {"sampled_area", number(surfaceArea)},
+                            {"solid_blocks", solidBlocks},
+                            {"solid_voxels", number(solidVoxels)},
+                            {"solid_density", number(info.solidDensity)},
+                            {"mean_density", number(mass / n3)},
+                            {"occupied_bounds", nullptr},
+                            {"fit_error", {{"mean", number(info.fitError.mean)},
+                                           {"max", number(info.fitError.max)},
+                                           {"samples", info.fitError.samples}}},
+                            {"checksums", checksumsJson(check)}};
+        if (!volume.blocks.empty()) j["occupied_bounds"] = {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+        out << j.dump() << '\n';
         return;
     }
     char line[512];

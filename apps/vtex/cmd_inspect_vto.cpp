@@ -1,5 +1,6 @@
 // `vtex inspect texel.vto [--json]`: what an octree holds, level by level.
 #include "cli.h"
+#include "inspect_checksums.h"
 
 #include <vtex/core/error.h>
 #include <vtex/octree/octree.h>
@@ -8,77 +9,55 @@
 #include <cstdio>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 namespace vtex::cli {
 namespace {
 
-std::string number(double v) {
-    if (!std::isfinite(v)) return "null";
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.9g", v);
-    return buffer;
-}
-
-std::string quoted(const std::string& s) {
-    std::string out = "\"";
-    for (char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
-        if (static_cast<unsigned char>(c) < 0x20) {
-            char esc[8];
-            std::snprintf(esc, sizeof esc, "\\u%04x", c);
-            out += esc;
-        } else {
-            out += c;
-        }
-    }
-    return out + "\"";
-}
-
-std::string checksumsJson(const octree::FileCheck& check) {
-    std::string out = "{\"valid\": " + std::string(check.problem.empty() ? "true" : "false") +
-                      ", \"version\": " + std::to_string(check.version) + ", \"problem\": " +
-                      (check.problem.empty() ? "null" : quoted(check.problem)) + ", \"sections\": [";
-    for (std::size_t i = 0; i < check.sections.size(); ++i) {
-        const auto& s = check.sections[i];
-        out += (i ? ", " : "") + std::string("{\"tag\": ") + quoted(s.tag) + ", \"bytes\": " + std::to_string(s.size) +
-               ", \"checksum\": " + (s.checksumOk ? "\"ok\"" : "\"mismatch\"") + "}";
-    }
-    return out + "]}";
-}
+// JSON has no NaN or infinity.
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 void inspectVto(const std::filesystem::path& file, bool json, std::ostream& out) {
     const std::string bytes = octree::readFileBytes(file);
     const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTO", 8), octree::kVtoVersion);
     if (!check.problem.empty()) {
-        if (json) {
-            out << "{\"file\": " << quoted(file.string()) << ", \"checksums\": " << checksumsJson(check) << "}\n";
-        } else {
-            out << "checksums:";
-            for (const auto& s : check.sections) out << "  " << s.tag << (s.checksumOk ? " ok" : " MISMATCH");
-            out << "  -- " << check.problem << '\n';
-        }
+        if (json) out << nlohmann::json{{"file", file.string()}, {"checksums", checksumsJson(check)}}.dump() << '\n';
+        else printChecksums(check, out);
     }
     const octree::Octree tree = octree::parseVto(bytes, file);  // throws on any problem
     const auto& info = tree.info;
     if (json) {
-        out << "{\"file\": " << quoted(file.string()) << ", \"kind\": \"vto\", \"version\": " << check.version
-            << ", \"resolution\": " << tree.resolution() << ", \"levels\": " << tree.levelCount()
-            << ", \"cyclic\": " << (info.source.cyclic ? "true" : "false") << ", \"filter\": \""
-            << octree::filterRuleName(info.rule) << "\", \"tolerance\": " << number(info.tolerance)
-            << ", \"stored_nodes\": " << tree.storedNodes() << ", \"compression\": " << number(tree.compression())
-            << ", \"source_triangles\": " << info.source.sourceTriangles
-            << ", \"source_area\": " << number(info.source.sourceArea) << ", \"fit_error\": {\"mean\": "
-            << number(info.source.fitError.mean) << ", \"max\": " << number(info.source.fitError.max)
-            << ", \"samples\": " << info.source.fitError.samples << "}, \"per_level\": [";
+        nlohmann::json levels = nlohmann::json::array();
         for (std::uint32_t l = 0; l < tree.levelCount(); ++l) {
             const auto& s = tree.stats[l];
-            out << (l ? ", " : "") << "{\"level\": " << l << ", \"resolution\": " << (1u << l)
-                << ", \"stored_nodes\": " << s.storedNodes << ", \"occupied_nodes\": " << s.occupiedNodes
-                << ", \"mean_density\": " << number(s.meanDensity)
-                << ", \"mean_occupied_density\": " << number(s.meanOccupiedDensity)
-                << ", \"filter_error\": {\"mean\": " << number(s.filterErrorMean) << ", \"max\": "
-                << number(s.filterErrorMax) << ", \"samples\": " << s.filterErrorSamples << "}}";
+            levels.push_back({{"level", l},
+                              {"resolution", 1u << l},
+                              {"stored_nodes", s.storedNodes},
+                              {"occupied_nodes", s.occupiedNodes},
+                              {"mean_density", number(s.meanDensity)},
+                              {"mean_occupied_density", number(s.meanOccupiedDensity)},
+                              {"filter_error", {{"mean", number(s.filterErrorMean)},
+                                                {"max", number(s.filterErrorMax)},
+                                                {"samples", s.filterErrorSamples}}}});
         }
-        out << "], \"checksums\": " << checksumsJson(check) << "}\n";
+        const nlohmann::json j = {{"file", file.string()},
+                                  {"kind", "vto"},
+                                  {"version", check.version},
+                                  {"resolution", tree.resolution()},
+                                  {"levels", tree.levelCount()},
+                                  {"cyclic", info.source.cyclic},
+                                  {"filter", std::string(octree::filterRuleName(info.rule))},
+                                  {"tolerance", number(info.tolerance)},
+                                  {"stored_nodes", tree.storedNodes()},
+                                  {"compression", number(tree.compression())},
+                                  {"source_triangles", info.source.sourceTriangles},
+                                  {"source_area", number(info.source.sourceArea)},
+                                  {"fit_error", {{"mean", number(info.source.fitError.mean)},
+                                                 {"max", number(info.source.fitError.max)},
+                                                 {"samples", info.source.fitError.samples}}},
+                                  {"per_level", levels},
+                                  {"checksums", checksumsJson(check)}};
+        out << j.dump() << '\n';
         return;
     }
     char line[512];
@@ -103,9 +82,7 @@ void inspectVto(const std::filesystem::path& file, bool json, std::ostream& out)
                       (unsigned long long)s.filterErrorSamples);
         out << line;
     }
-    out << "checksums:";
-    for (const auto& s : check.sections) out << "  " << s.tag << (s.checksumOk ? " ok" : " MISMATCH");
-    out << '\n';
+    printChecksums(check, out);
 }
 
 const bool registered = registerInspector(".vto", inspectVto);

@@ -1,10 +1,12 @@
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 
+#include <atomic>
 #include <cerrno>
+#include <cstdio>
+#include <random>
 #include <cstring>
 #include <string>
-#include <vector>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -37,17 +39,28 @@ AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::
     if (!std::filesystem::is_directory(directory))
         throw IoError(mTarget, "output directory does not exist");
 
-    // Hidden, and named after the target, so a stray temporary is easy to attribute.
-    std::string name = ".";
-    name += mTarget.filename().string();
-    name += ".tmp.XXXXXX";
-    const std::string pattern = (directory / name).string();
-    std::vector<char> buffer(pattern.begin(), pattern.end());
-    buffer.push_back('\0');
-    const int fd = ::mkstemp(buffer.data());
-    if (fd < 0) throw IoError(mTarget, "cannot create a temporary file beside it: " + systemError());
-    ::close(fd);
-    mTemporary = buffer.data();
+    // Hidden, and named after the target, so a stray temporary is easy to attribute. Not
+    // mkstemp: its files are mode 0600, and an output should get the user's umask like any
+    // other file, so the temporary is created 0666 & ~umask with O_EXCL and a unique suffix.
+    static std::atomic<unsigned> counter{0};
+    std::random_device entropy;
+    for (int attempt = 0; attempt < 100; ++attempt) {
+        char suffix[32];
+        std::snprintf(suffix, sizeof suffix, ".tmp.%d.%u.%08x", int(::getpid()), counter.fetch_add(1),
+                      unsigned(entropy()));
+        std::string name = ".";
+        name += mTarget.filename().string();
+        name += suffix;
+        const std::filesystem::path candidate = directory / name;
+        const int fd = ::open(candidate.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0666);
+        if (fd >= 0) {
+            ::close(fd);
+            mTemporary = candidate;
+            return;
+        }
+        if (errno != EEXIST) throw IoError(mTarget, "cannot create a temporary file beside it: " + systemError());
+    }
+    throw IoError(mTarget, "cannot create a temporary file beside it: every name tried exists");
 }
 
 AtomicOutputFile::~AtomicOutputFile() {

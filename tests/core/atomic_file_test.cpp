@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+
+#include <sys/stat.h>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -73,4 +75,14 @@ TEST(AtomicOutputFile, AMissingDirectoryIsRefusedBeforeAnyWork) {
     const fs::path dir = freshDirectory("missing");
     EXPECT_THROW(vtex::AtomicOutputFile{dir / "no" / "such" / "dir" / "out.txt"}, vtex::IoError);
     EXPECT_THROW(vtex::AtomicOutputFile{dir}, vtex::IoError);
+}
+
+TEST(AtomicOutputFile, TheFileGetsTheUsersUmaskNotPrivateMode) {
+    const fs::path dir = freshDirectory("mode");
+    const mode_t previous = ::umask(022);
+    vtex::writeFileAtomically(dir / "out.txt", "shared");
+    ::umask(previous);
+    const auto permissions = fs::status(dir / "out.txt").permissions();
+    EXPECT_EQ(permissions, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                               fs::perms::others_read);
 }
