@@ -32,6 +32,7 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         options.jobs = o->jobs;
         options.log = [&global](const std::string& line) { status(global, line); };
         const pipelines::RunReport report = pipelines::runPipeline(pipeline, options);
+        for (const auto& omission : report.leftOut) status(global, "left out: texel " + omission.texel + ": " + omission.reason);
         status(global, "report: " + report.reportHtml.string());
         if (!report.succeeded()) {
             for (const auto& stage : report.stages)

@@ -3,6 +3,7 @@
 
 #include <vtex/core/error.h>
 #include <vtex/core/toml_reader.h>
+#include <vtex/render/scene.h>
 #include <vtex/sampler/patterns.h>
 
 #include <fstream>
@@ -33,6 +34,12 @@ void requireFile(const TomlReader& reader, const std::string& key, const fs::pat
 
 }  // namespace
 
+std::size_t sceneTexelIndex(const render::Scene& scene, const std::string& name) {
+    for (std::size_t i = 0; i < scene.texels.size(); ++i)
+        if (scene.texels[i].name == name) return i;
+    throw InputError(scene.file, "the pipeline binds texel '" + name + "', which the scene does not define");
+}
+
 Pipeline loadPipeline(const fs::path& file) {
     std::ifstream in(file, std::ios::binary);
     if (!in) throw InputError(file, "cannot open the pipeline file");
@@ -47,7 +54,8 @@ Pipeline loadPipeline(const fs::path& file) {
 
     pipeline.output = file.parent_path() / (file.stem().string() + "-out");
     if (const toml::table* settings = reader.subtable(root, "", "pipeline", false)) {
-        reader.checkKeys(*settings, "pipeline", {"output"});
+        reader.checkKeys(*settings, "pipeline", {"output", "fit_resolution"});
+        pipeline.fitResolution = reader.boolean(*settings, "pipeline", "fit_resolution", true);
         if (settings->contains("output")) pipeline.output = reader.resolve(reader.string(*settings, "pipeline", "output", {}));
     }
 
@@ -117,6 +125,15 @@ Pipeline loadPipeline(const fs::path& file) {
                 if (!value) reader.fail(key, "must be the name of a [[texel]]");
                 if (!texelNames.count(value->get())) reader.fail(key, "no [[texel]] named '" + value->get() + "'");
                 s.texels[std::string(sceneName.str())] = value->get();
+            }
+        }
+        // The scene itself must be valid and define every bound texel, before anything runs.
+        const render::Scene scene = render::loadScene(s.scene);
+        for (const auto& [sceneTexel, texel] : s.texels) {
+            try {
+                sceneTexelIndex(scene, sceneTexel);
+            } catch (const InputError& e) {
+                reader.fail(TomlReader::join(TomlReader::join(path, "texels"), sceneTexel), e.problem());
             }
         }
         s.width = int(reader.integer(t, path, "width", 0, 0, 16384));

@@ -69,7 +69,12 @@ void writeReports(const Pipeline& pipeline, RunReport& report) {
                        {"succeeded", report.succeeded()},
                        {"seconds", report.seconds},
                        {"peak_memory_bytes", peakResidentBytes()},
-                       {"stages", stages}};
+                       {"stages", stages},
+                       {"left_out", [&] {
+                            Json out = Json::array();
+                            for (const Omission& o : report.leftOut) out.push_back({{"texel", o.texel}, {"reason", o.reason}});
+                            return out;
+                        }()}};
     report.reportJson = report.output / "report.json";
     writeFileAtomically(report.reportJson, json.dump(2) + "\n");
 
@@ -91,7 +96,14 @@ void writeReports(const Pipeline& pipeline, RunReport& report) {
              << escapeHtml(s.detailsJson.size() > 300 ? s.detailsJson.substr(0, 300) + "…" : s.detailsJson)
              << "</code></td></tr>\n";
     }
-    html << "</table>\n<h2>Images</h2>\n";
+    html << "</table>\n";
+    if (!report.leftOut.empty()) {
+        html << "<h2>Left out (not needed by any render)</h2>\n<ul>\n";
+        for (const Omission& o : report.leftOut)
+            html << "<li><b>" << escapeHtml(o.texel) << "</b>: " << escapeHtml(o.reason) << "</li>\n";
+        html << "</ul>\n";
+    }
+    html << "<h2>Images</h2>\n";
     for (const StageRecord& s : report.stages) {
         if (s.status != StageRecord::Status::Ran && s.status != StageRecord::Status::Cached) continue;
         for (const auto& o : s.outputs)

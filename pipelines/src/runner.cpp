@@ -9,6 +9,7 @@
 #include <vtex/octree/octree.h>
 #include <vtex/octree/volume.h>
 #include <vtex/render/compare.h>
+#include <vtex/render/level_bound.h>
 #include <vtex/render/renderer.h>
 #include <vtex/render/scene.h>
 #include <vtex/sampler/patterns.h>
@@ -21,6 +22,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <bit>
 #include <chrono>
 #include <fstream>
 #include <map>
@@ -93,6 +95,16 @@ std::string statusWord(Status s) {
     return "?";
 }
 
+render::RenderOptions renderOptions(const RenderStep& step) {
+    render::RenderOptions o;
+    o.width = step.width;
+    o.height = step.height;
+    o.spp = step.spp;
+    o.lodBias = step.lodBias;
+    o.shading = step.shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
+    return o;
+}
+
 std::string readText(const fs::path& file) {
     std::ifstream in(file, std::ios::binary);
     std::ostringstream s;
@@ -125,6 +137,45 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     auto log = [&](const std::string& line) {
         if (options.log) options.log(line);
     };
+
+    RunReport report;
+    report.output = root;
+
+    // Leave out what the renders do not need: each texel is sampled to the finest level any
+    // ray of any render can use (capped by its `resolution`), and texels no render uses are
+    // not built at all.
+    std::map<std::string, std::uint32_t> resolution;
+    for (const TexelStep& step : pipeline.texels) resolution[step.name] = step.resolution;
+    if (pipeline.fitResolution && !pipeline.renders.empty()) {
+        std::map<std::string, std::pair<int, std::string>> need;  // texel → (finest level, render)
+        for (const RenderStep& step : pipeline.renders) {
+            const render::Scene scene = render::loadScene(step.scene);
+            const auto needs = render::finestUsefulLevels(scene, renderOptions(step));
+            for (const auto& [sceneTexel, texel] : step.texels) {
+                const auto& n = needs[sceneTexelIndex(scene, sceneTexel)];
+                if (!n.used) continue;
+                const int level = n.unbounded ? 63 : n.finestLevel;
+                if (!need.count(texel) || level > need[texel].first) need[texel] = {level, step.name};
+            }
+        }
+        for (const TexelStep& step : pipeline.texels) {
+            const auto found = need.find(step.name);
+            if (found == need.end()) {
+                resolution.erase(step.name);
+                report.leftOut.push_back({step.name, "not built: no surface of any render uses it"});
+                continue;
+            }
+            const int cap = std::countr_zero(step.resolution);
+            const int level = std::min(cap, found->second.first);
+            resolution[step.name] = std::uint32_t(1) << level;
+            if (level < cap)
+                report.leftOut.push_back(
+                    {step.name, "sampled at " + std::to_string(1u << level) + "³ instead of " +
+                                    std::to_string(step.resolution) + "³: the finest level any ray of render '" +
+                                    found->second.second + "' can use is " + std::to_string(found->second.first)});
+        }
+    }
+    auto isBuilt = [&](const std::string& texel) { return resolution.count(texel) > 0; };
 
     // The stage graph, in waves: every stage's inputs come from an earlier wave.
     std::vector<Stage> stages;
@@ -165,6 +216,8 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     }
 
     for (const TexelStep& step : pipeline.texels) {
+        if (!isBuilt(step.name)) continue;
+        const std::uint32_t sampledResolution = resolution.at(step.name);
         const SourceStep& source = *std::find_if(pipeline.sources.begin(), pipeline.sources.end(),
                                                  [&](const SourceStep& s) { return s.name == step.source; });
         const bool cyclic = step.cyclic.value_or(!source.pattern.empty() && sampler::isCyclicPattern(source.pattern));
@@ -175,16 +228,16 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         stages.push_back(std::move(sample));
         Stage& s = stages.back();
         const std::size_t sourceStage = s.inputs[0];
-        s.describe = [&stages, step, cyclic, sourceStage, header] {
+        s.describe = [&stages, step, cyclic, sourceStage, sampledResolution, header] {
             std::ostringstream d;
-            d << header << "sample\nresolution " << step.resolution << " cyclic " << cyclic << " solid " << step.solid
+            d << header << "sample\nresolution " << sampledResolution << " cyclic " << cyclic << " solid " << step.solid
               << "\nmesh " << stages[sourceStage].outputHashes.at("mesh") << "\n";
             return d.str();
         };
-        s.run = [&stages, step, cyclic, sourceStage](Stage& self) {
+        s.run = [&stages, step, cyclic, sourceStage, sampledResolution](Stage& self) {
             const ingest::TriangleMesh mesh = ingest::loadMesh(stages[sourceStage].outputs.at("mesh"));
             sampler::SampleOptions o;
-            o.resolution = step.resolution;
+            o.resolution = sampledResolution;
             o.cyclic = cyclic;
             o.solid = step.solid == "on" ? sampler::SolidMode::On
                       : step.solid == "off" ? sampler::SolidMode::Off
@@ -192,7 +245,8 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             NullProgress quiet;
             const octree::SparseVolume volume = sampler::sampleMesh(mesh, o, quiet);
             octree::writeVtl(volume, self.outputs.at("volume"));
-            return Json{{"resolution", step.resolution},
+            return Json{{"resolution", sampledResolution},
+                        {"maximum_resolution", step.resolution},
                         {"occupied_blocks", volume.blocks.size()},
                         {"source_area", volume.info.sourceArea},
                         {"fit_error_mean", volume.info.fitError.mean}};
@@ -202,6 +256,7 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
 
     // All samples form one wave and all builds the next, so that texels run side by side.
     for (const TexelStep& step : pipeline.texels) {
+        if (!isBuilt(step.name)) continue;
         Stage build{"build", step.name};
         build.inputs = {sampleIndex.at(step.name)};
         build.outputs["octree"] = root / "builds" / (step.name + ".vto");
@@ -234,7 +289,11 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
 
     for (const RenderStep& step : pipeline.renders) {
         Stage s{"render", step.name};
-        for (const auto& [sceneTexel, texel] : step.texels) {
+        // Bindings of texels that were left out name texels the scene does not use.
+        std::vector<std::pair<std::string, std::string>> bindings;
+        for (const auto& binding : step.texels)
+            if (isBuilt(binding.second)) bindings.push_back(binding);
+        for (const auto& [sceneTexel, texel] : bindings) {
             s.inputs.push_back(buildIndex.at(texel));
             s.inputs.push_back(sourceIndex.at(std::find_if(pipeline.texels.begin(), pipeline.texels.end(),
                                                            [&](const TexelStep& t) { return t.name == texel; })
@@ -249,14 +308,11 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         // Stages are addressed by index: the vector grows while the graph is built.
         Stage& r = stages.back();
         // The scene as this render sees it: bound texels point at the pipeline's artifacts.
-        auto boundScene = [&stages, step, self] {
+        auto boundScene = [&stages, step, bindings, self] {
             render::Scene scene = render::loadScene(step.scene);
             std::size_t input = 0;
-            for (const auto& [sceneTexel, texel] : step.texels) {
-                auto found = std::find_if(scene.texels.begin(), scene.texels.end(),
-                                          [&](const render::TexelDef& t) { return t.name == sceneTexel; });
-                if (found == scene.texels.end())
-                    throw InputError(step.scene, "the pipeline binds texel '" + sceneTexel + "', which the scene does not define");
+            for (const auto& [sceneTexel, texel] : bindings) {
+                render::TexelDef* found = &scene.texels[sceneTexelIndex(scene, sceneTexel)];
                 found->volume = stages[stages[self].inputs[input]].outputs.at("octree");
                 found->source = stages[stages[self].inputs[input + 1]].outputs.at("mesh");
                 input += 2;
@@ -269,21 +325,16 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
               << step.lodBias << " shading " << step.shading << "\nscene " << hashFile(step.scene) << "\n";
             const render::Scene scene = boundScene();
             for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";
-            for (const auto& texel : scene.texels) d << "texel " << texel.name << " " << hashFile(texel.volume) << "\n";
+            for (const auto& surface : scene.surfaces)
+                if (surface.texel)
+                    d << "texel " << *surface.texel << " " << hashFile(scene.texels[*surface.texel].volume) << "\n";
             for (std::size_t input : stages[self].inputs)
                 for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
             return d.str();
         };
         r.run = [step, boundScene](Stage& self) {
-            render::RenderOptions o;
-            o.width = step.width;
-            o.height = step.height;
-            o.spp = step.spp;
-            o.lodBias = step.lodBias;
-            o.shading = step.shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
-            // Stages already run in parallel: each render keeps to the threads TBB gives it.
             NullProgress quiet;
-            const render::RenderResult result = render::renderScene(boundScene(), o, quiet);
+            const render::RenderResult result = render::renderScene(boundScene(), renderOptions(step), quiet);
             render::writeExr(result.image, self.outputs.at("image"));
             render::writePng(result.image, self.outputs.at("preview"));
             render::writeStatsJson(result.stats, self.outputs.at("stats"));
@@ -373,8 +424,6 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         first = last;
     }
 
-    RunReport report;
-    report.output = root;
     for (const Stage& s : stages) report.stages.push_back(s.record);
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     writeReports(pipeline, report);

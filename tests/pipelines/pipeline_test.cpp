@@ -5,6 +5,7 @@
 #include "run_vtex.h"
 
 #include <vtex/core/error.h>
+#include <vtex/octree/volume.h>
 #include <vtex/pipelines/pipeline.h>
 
 #include <gtest/gtest.h>
@@ -268,6 +269,51 @@ TEST(Pipeline, AKilledRunCompletesLaterWithoutRedoingFinishedStages) {
     EXPECT_GE(partialRuns, 1) << "no kill landed between the first and the last stage: the test proved nothing";
 }
 
+TEST(Pipeline, TexelsAreSampledOnlyAsFinelyAsARenderCanUseAndUnusedOnesAreNotBuilt) {
+    const fs::path dir = makeProject("leave_out");
+    std::string pipeline = vtex::test::readText(dir / "pipeline.toml");
+    pipeline.replace(pipeline.find("resolution = 16"), 15, "resolution = 512");
+    pipeline += "\n[[texel]]\nname = \"spare\"\nsource = \"grass\"\nresolution = 32\n";
+    writeText(dir / "pipeline.toml", pipeline);
+
+    RunReport report = run(dir);
+    ASSERT_TRUE(report.succeeded());
+    // A 48×36 image of a 2-unit hill from 3.6 units cannot use 512³ voxels.
+    const auto grass = vtex::octree::readVtl(dir / "out/samples/grass.vtl");
+    EXPECT_LT(grass.info.resolution(), 512u);
+    EXPECT_GE(grass.info.resolution(), 8u);
+    EXPECT_FALSE(fs::exists(dir / "out/samples/spare.vtl"));
+    EXPECT_FALSE(fs::exists(dir / "out/builds/spare.vto"));
+    std::map<std::string, std::string> reasons;
+    for (const auto& o : report.leftOut) reasons[o.texel] = o.reason;
+    EXPECT_NE(reasons["grass"].find("instead of 512"), std::string::npos) << reasons["grass"];
+    EXPECT_NE(reasons["spare"].find("not built"), std::string::npos) << reasons["spare"];
+    const auto json = nlohmann::json::parse(vtex::test::readText(dir / "out/report.json"));
+    EXPECT_EQ(json["left_out"].size(), 2u);
+
+    // A render four times as large needs two more levels: the grass is sampled again, finer.
+    std::string scene = vtex::test::readText(dir / "hill.toml");
+    scene.replace(scene.find("width = 48"), 10, "width = 192");
+    scene.replace(scene.find("height = 36"), 11, "height = 144");
+    writeText(dir / "hill.toml", scene);
+    report = run(dir);
+    ASSERT_TRUE(report.succeeded());
+    EXPECT_EQ(statuses(report).at("sample grass"), Status::Ran);
+    EXPECT_EQ(vtex::octree::readVtl(dir / "out/samples/grass.vtl").info.resolution(),
+              std::min(512u, 4 * grass.info.resolution()));
+
+    // Asking for every texel at its resolution: nothing is left out.
+    pipeline = vtex::test::readText(dir / "pipeline.toml");
+    pipeline.replace(pipeline.find("output = \"out\""), 14, "output = \"out\"\nfit_resolution = false");
+    pipeline.replace(pipeline.find("resolution = 512"), 16, "resolution = 16");
+    writeText(dir / "pipeline.toml", pipeline);
+    report = run(dir);
+    ASSERT_TRUE(report.succeeded());
+    EXPECT_TRUE(report.leftOut.empty());
+    EXPECT_TRUE(fs::exists(dir / "out/builds/spare.vto"));
+    EXPECT_EQ(vtex::octree::readVtl(dir / "out/samples/grass.vtl").info.resolution(), 16u);
+}
+
 TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {
     const fs::path dir = makeProject("refused");
     const std::string good = vtex::test::readText(dir / "pipeline.toml");
@@ -278,10 +324,12 @@ TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {
         {"b = \"cross-hill\"", "b = 7"},                      // compare[0].b
         {"texels = { cover = \"grass\" }", "texels = { cover = \"moss\" }"},
         {"pattern = \"grass\"", "pattern = \"grass\"\nfile = \"cross.obj\""},
+        {"texels = { cover = \"grass\" }", "texels = { moss = \"grass\" }"},  // not in the scene
         {"[pipeline]", "[pipeline"},                          // TOML syntax
     };
     const std::vector<std::string> keys = {"texel[0].resolution", "texel[1].source", "source[1].file",
-                                           "compare[0].b", "render[0].texels.cover", "source[0]", "line 2"};
+                                           "compare[0].b", "render[0].texels.cover", "source[0]",
+                                           "render[0].texels.moss", "line 2"};
     for (std::size_t i = 0; i < cases.size(); ++i) {
         std::string bad = good;
         bad.replace(bad.find(cases[i].first), cases[i].first.size(), cases[i].second);

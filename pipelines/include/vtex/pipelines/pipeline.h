@@ -24,6 +24,10 @@
 #include <string>
 #include <vector>
 
+namespace vtex::render {
+struct Scene;
+}
+
 namespace vtex::pipelines {
 
 struct SourceStep {
@@ -40,7 +44,9 @@ struct SourceStep {
 struct TexelStep {
     std::string name;
     std::string source;                 ///< a SourceStep name
-    std::uint32_t resolution = 64;      ///< finest voxels per side (power of two)
+    /// Finest voxels per side (power of two): the maximum; with Pipeline::fitResolution the
+    /// texel is sampled only as finely as some render can use.
+    std::uint32_t resolution = 64;
     std::optional<bool> cyclic;         ///< default: whether the source pattern is cyclic
     std::string solid = "auto";         ///< auto | on | off
     std::string filter = "sggx";        ///< neyret | sggx
@@ -70,6 +76,10 @@ struct Pipeline {
     std::vector<TexelStep> texels;
     std::vector<RenderStep> renders;
     std::vector<CompareStep> compares;
+    /// [pipeline] fit_resolution (default true): when the pipeline renders anything, sample each
+    /// texel only to the finest level its renders can use (render::finestUsefulLevels) and leave
+    /// out the texels no render uses.
+    bool fitResolution = true;
     std::vector<std::string> warnings;  ///< unknown keys
 };
 
@@ -77,6 +87,9 @@ struct Pipeline {
 /// ranges checked, input files present) before anything runs. Throws vtex::InputError naming the
 /// file and the key.
 Pipeline loadPipeline(const std::filesystem::path& file);
+
+/// The index of the texel named `name` in `scene`. Throws vtex::InputError naming the scene.
+std::size_t sceneTexelIndex(const render::Scene& scene, const std::string& name);
 
 struct RunOptions {
     std::filesystem::path output;       ///< overrides Pipeline::output when not empty
@@ -97,9 +110,16 @@ struct StageRecord {
     std::string detailsJson;            ///< stage figures (sizes, compression, render stats…)
 };
 
+/// What the run left out of a texel, and why.
+struct Omission {
+    std::string texel;
+    std::string reason;  ///< e.g. "sampled at 32³ instead of 128³: the finest level …"
+};
+
 struct RunReport {
     std::filesystem::path output;
     std::vector<StageRecord> stages;
+    std::vector<Omission> leftOut;
     double seconds = 0;
     std::filesystem::path reportJson, reportHtml;
     bool succeeded() const;
