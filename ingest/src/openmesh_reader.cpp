@@ -79,16 +79,22 @@ bool parseCount(std::string_view token, std::uint64_t& value) {
 }
 
 void precheckOff(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
+    // Line by line, as OpenMesh reads it: the keyword alone on the first line, then exactly
+    // three counts (the fuzzer found that "OFF 0 0" made the two readers disagree on the counts).
     Tokens tokens(bytes);
-    const std::string_view magic = tokens.next();
+    Tokens magicLine(tokens.line());
+    const std::string_view magic = magicLine.next();
     if (magic.size() < 3 || magic.substr(magic.size() - 3) != "OFF")
         throw InputError(file, "not an OFF file (no OFF keyword)");
     if (magic.find('n') != std::string_view::npos || magic.find('4') != std::string_view::npos)
         throw InputError(file, "nOFF and 4OFF (higher-dimensional) files are not supported");
-    std::string_view first = tokens.next();
-    if (first == "BINARY") throw InputError(file, "binary OFF is not supported");
+    const std::string_view extra = magicLine.next();
+    if (extra == "BINARY") throw InputError(file, "binary OFF is not supported");
+    if (!extra.empty()) throw InputError(file, "OFF header: the keyword must be alone on its line");
+    Tokens countLine(tokens.line());
     std::uint64_t vertices = 0, faces = 0, edges = 0;
-    if (!parseCount(first, vertices) || !parseCount(tokens.next(), faces) || !parseCount(tokens.next(), edges))
+    if (!parseCount(countLine.next(), vertices) || !parseCount(countLine.next(), faces) ||
+        !parseCount(countLine.next(), edges) || !countLine.next().empty())
         throw InputError(file, "OFF header: bad vertex/face/edge counts");
     // Each vertex takes at least "0 0 0\n" (6 bytes), each face "3 0 0 0\n" (8 bytes).
     const std::uint64_t available = bytes.size();

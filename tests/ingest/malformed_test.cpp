@@ -278,6 +278,7 @@ TEST(Malformed, FuzzPlyHeaderGarbageHangs) {
 TEST(Malformed, FuzzOffGarbageTokenHangs) {
     // A token OpenMesh's ASCII OFF reader cannot extract made it loop forever.
     expectRefused("fuzz_hang.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2=v\n", "OFF face 0");
+    expectRefused("fuzz_counts.off", "OFF 0 0\n0 1 0\n2000000000 0 1 2\n", "alone on its line");
     expectRefused("fuzz_hang2.off", "OFF\n3 1 0\n0 0 0\n0.5000.0 0 0\n0 1 0\n3 0 1 2\n", "OFF vertex 1: bad number");
 }
 
