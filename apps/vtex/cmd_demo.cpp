@@ -2,7 +2,6 @@
 #include "cli.h"
 
 #include <vtex/pipelines/demo.h>
-#include <vtex/sampler/patterns.h>
 
 #include <iostream>
 
@@ -11,11 +10,12 @@ namespace {
 
 const bool registered = registerCommand(90, [](CLI::App& app) -> Action {
     app.name("demo");
-    app.description("The built-in showcase: the paper's patterns turned into texels, no input needed");
+    app.description("The built-in showcase: the paper's figures rebuilt from the procedural patterns, run as a "
+                    "cached pipeline with a report; needs no input");
     auto options = std::make_shared<pipelines::DemoOptions>();
     app.add_option("-o,--output", options->outputDirectory, "Directory for everything the demo makes")
         ->capture_default_str();
-    app.add_option("--resolution", options->resolution, "Finest voxels per side (a power of two)")
+    app.add_option("--resolution", options->maxResolution, "Largest texel resolution (a power of two)")
         ->capture_default_str()
         ->check(CLI::Range(4u, 1024u))
         ->check(CLI::Validator(
@@ -24,13 +24,17 @@ const bool registered = registerCommand(90, [](CLI::App& app) -> Action {
                 return (n & (n - 1)) == 0 ? std::string() : std::string("must be a power of two");
             },
             "POWER OF TWO"));
+    app.add_option("--scale", options->imageScale, "Image size relative to 768x576")
+        ->capture_default_str()
+        ->check(CLI::Range(0.05, 4.0));
     app.add_option("--seed", options->seed, "Seed of the procedural patterns")->capture_default_str();
-    app.add_option("--pattern", options->patterns, "Run only these patterns (repeatable)")
-        ->check(CLI::IsMember(sampler::patternNames()));
+    app.add_flag("--force", options->force, "Redo every stage, cached or not");
+    app.add_option("--jobs", options->run.jobs, "Stages run at once (0: as many as cores)")->check(CLI::Range(0, 1024));
     return [options](const GlobalOptions& global) {
-        TerminalProgress progress(global);
-        const pipelines::DemoReport report = pipelines::runDemo(*options, progress);
+        options->run.log = [&global](const std::string& line) { status(global, line); };
+        const pipelines::RunReport report = pipelines::runDemo(*options);
         std::cout << pipelines::formatDemoReport(report);
+        if (!report.succeeded()) throw std::runtime_error("some stages of the demo failed (see above)");
     };
 });
 

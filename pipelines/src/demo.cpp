@@ -2,253 +2,188 @@
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
-#include <vtex/core/version.h>
-#include <vtex/ingest/ingest.h>
-#include <vtex/octree/octree.h>
-#include <vtex/octree/volume.h>
-#include <vtex/render/renderer.h>
-#include <vtex/render/scene.h>
-#include <vtex/sampler/patterns.h>
-#include <vtex/sampler/sampler.h>
 
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <numbers>
 #include <sstream>
-#include <stdexcept>
 
 namespace vtex::pipelines {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+using Point = std::array<double, 3>;
 
-double secondsSince(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-// The base surface of the demo scenes: a grid of `cells`² bilinear quads over [-1, 1]², lifted
-// into a round hill, faces counter-clockwise seen from above so that their normals point up.
-void writeHillObj(const std::filesystem::path& file, int cells) {
+// A quad grid of nu × nv faces from a parametric surface, counter-clockwise seen from the side
+// the normal ∂u × ∂v points to, written as OBJ.
+void writeGridObj(const fs::path& file, int nu, int nv, bool wrapU, bool wrapV,
+                  const std::function<Point(double, double)>& surface, const std::string& comment) {
     std::ostringstream obj;
-    obj << "# vtex demo: a hill of " << cells * cells << " bilinear faces\n";
-    for (int j = 0; j <= cells; ++j)
-        for (int i = 0; i <= cells; ++i) {
-            const double x = -1 + 2.0 * i / cells, y = -1 + 2.0 * j / cells;
-            const double z = 0.35 * std::exp(-2.5 * (x * x + y * y));
-            obj << "v " << x << ' ' << y << ' ' << z << '\n';
+    obj.precision(9);
+    obj << "# vtex demo: " << comment << ", " << nu * nv << " bilinear faces\n";
+    const int columns = wrapU ? nu : nu + 1, rows = wrapV ? nv : nv + 1;
+    for (int j = 0; j < rows; ++j)
+        for (int i = 0; i < columns; ++i) {
+            const Point p = surface(double(i) / nu, double(j) / nv);
+            obj << "v " << p[0] << ' ' << p[1] << ' ' << p[2] << '\n';
         }
-    for (int j = 0; j < cells; ++j)
-        for (int i = 0; i < cells; ++i) {
-            const int a = j * (cells + 1) + i + 1;  // OBJ indices start at 1
-            obj << "f " << a << ' ' << a + 1 << ' ' << a + cells + 2 << ' ' << a + cells + 1 << '\n';
-        }
+    auto index = [&](int i, int j) { return (j % rows) * columns + (i % columns) + 1; };  // OBJ counts from 1
+    for (int j = 0; j < nv; ++j)
+        for (int i = 0; i < nu; ++i)
+            obj << "f " << index(i, j) << ' ' << index(i + 1, j) << ' ' << index(i + 1, j + 1) << ' '
+                << index(i, j + 1) << '\n';
     writeFileAtomically(file, obj.str());
 }
 
-// A scene that covers the hill with one texel, lit by a low sun; paths relative to the scene.
-void writeHillScene(const std::filesystem::path& file, const std::string& texel, const std::string& volume,
-                    const std::string& source, double shellHeight, bool cyclic) {
-    std::ostringstream toml;
-    toml << "# vtex demo: the hill covered with the " << texel << " texel\n"
-         << "[camera]\nposition = [0.0, -3.2, 1.6]\nlook_at = [0.0, 0.0, 0.1]\nup = [0.0, 0.0, 1.0]\n"
-         << "fov_y = 38.0\nwidth = 384\nheight = 288\n\n"
-         << "[[light]]\ntype = \"directional\"\ndirection = [-1.0, 0.6, -0.8]\ncolor = [2.6, 2.5, 2.3]\n\n"
-         << "[[texel]]\nname = \"" << texel << "\"\nvolume = \"" << volume << "\"\nsource = \"" << source
-         << "\"\ntau = 1.0\n"
-         << "material = { diffuse = [1.0, 1.0, 1.0], specular = [0.05, 0.05, 0.05], shininess = 20.0, "
-            "ambient = [0.03, 0.035, 0.04] }\n\n"
-         << "[[surface]]\nmesh = \"hill.obj\"\ntexel = \"" << texel << "\"\nheight = " << shellHeight
-         << "\nplacement = \"on\"\nrepeat = " << (cyclic ? "[2.0, 2.0]" : "[1.0, 1.0]") << "\n"
-         << "material = { diffuse = [0.32, 0.26, 0.18], ambient = [0.02, 0.02, 0.02] }\n";
-    writeFileAtomically(file, toml.str());
+// A round hill: a height field over [-sx, sx] × [-sy, sy].
+std::function<Point(double, double)> hill(double sx, double sy, double height, double spread) {
+    return [=](double u, double v) {
+        const double x = sx * (2 * u - 1), y = sy * (2 * v - 1);
+        return Point{x, y, height * std::exp(-(x * x + y * y) / spread)};
+    };
 }
 
-nlohmann::json toJson(const DemoReport& report) {
-    nlohmann::json patterns = nlohmann::json::array();
-    for (const DemoPattern& p : report.patterns) {
-        nlohmann::json levels = nlohmann::json::array();
-        for (const DemoLevel& l : p.levels)
-            levels.push_back({{"level", l.level},
-                              {"stored_nodes", l.storedNodes},
-                              {"mean_density", l.meanDensity},
-                              {"filter_error_neyret", l.filterErrorNeyret},
-                              {"filter_error_sggx", l.filterErrorSggx}});
-        nlohmann::json files = nlohmann::json::array();
-        for (const auto& f : p.files) files.push_back(f.filename().string());
-        patterns.push_back({{"name", p.name},
-                            {"triangles", p.triangles},
-                            {"source_area", p.sourceArea},
-                            {"occupied_voxels", p.occupiedVoxels},
-                            {"fit_error_mean", p.fitErrorMean},
-                            {"compression_neyret", p.compressionNeyret},
-                            {"compression_sggx", p.compressionSggx},
-                            {"levels", levels},
-                            {"seconds", {{"pattern", p.secondsPattern},
-                                         {"ingest", p.secondsIngest},
-                                         {"sample", p.secondsSample},
-                                         {"build", p.secondsBuild},
-                                         {"render", p.secondsRender}}},
-                            {"render", {{"seconds", p.secondsRender},
-                                        {"mean_level", p.meanLevel},
-                                        {"rays", p.rays}}},
-                            {"files", files}});
-    }
-    return {{"vtex_version", kVersion},
-            {"resolution", report.options.resolution},
-            {"seed", report.options.seed},
-            {"seconds", report.seconds},
-            {"patterns", patterns}};
+struct Shot {
+    Point eye, target;
+    double fov;
+};
+
+std::string vector(const Point& p) {
+    char text[96];
+    std::snprintf(text, sizeof text, "[%.6g, %.6g, %.6g]", p[0], p[1], p[2]);
+    return text;
+}
+
+// One surface covered with one texel, under a low sun.
+void writeScene(const fs::path& file, const std::string& title, const Shot& shot, int width, int height,
+                const std::string& mesh, double shellHeight, std::array<double, 2> repeat, const Point& ground) {
+    std::ostringstream toml;
+    toml << "# vtex demo: " << title << "\n"
+         << "[camera]\nposition = " << vector(shot.eye) << "\nlook_at = " << vector(shot.target)
+         << "\nup = [0.0, 0.0, 1.0]\nfov_y = " << shot.fov << "\nwidth = " << width << "\nheight = " << height
+         << "\n\n[[light]]\ntype = \"directional\"\ndirection = [-0.6, 0.5, -0.8]\ncolor = [2.8, 2.7, 2.5]\n\n"
+         << "[[texel]]\nname = \"cover\"\nvolume = \"bound-by-the-pipeline.vto\"\ntau = 1.0\n"
+         << "material = { diffuse = [1.0, 1.0, 1.0], specular = [0.04, 0.04, 0.04], shininess = 20.0, "
+            "ambient = [0.04, 0.045, 0.05] }\n\n"
+         << "[[surface]]\nmesh = \"" << mesh << "\"\ntexel = \"cover\"\nheight = " << shellHeight
+         << "\nplacement = \"on\"\nrepeat = [" << repeat[0] << ", " << repeat[1] << "]\n"
+         << "material = { diffuse = " << vector(ground) << ", ambient = [0.02, 0.02, 0.02] }\n";
+    writeFileAtomically(file, toml.str());
 }
 
 }  // namespace
 
-DemoReport runDemo(const DemoOptions& options, Progress& progress) {
-    const auto start = Clock::now();
-    DemoReport report;
-    report.options = options;
-    const std::vector<std::string> names =
-        options.patterns.empty() ? sampler::patternNames() : options.patterns;
-    for (const auto& name : names) {
-        bool known = false;
-        for (const auto& n : sampler::patternNames()) known |= (n == name);
-        if (!known) throw std::invalid_argument("unknown pattern '" + name + "'");
-    }
-
+RunReport runDemo(const DemoOptions& options) {
+    const fs::path inputs = options.outputDirectory / "inputs";
     std::error_code error;
-    std::filesystem::create_directories(options.outputDirectory, error);
-    if (error) throw IoError(options.outputDirectory, "cannot create the output directory: " + error.message());
+    fs::create_directories(inputs, error);
+    if (error) throw IoError(inputs, "cannot create the output directory: " + error.message());
+    const int width = std::max(16, int(std::lround(768 * options.imageScale)));
+    const int height = std::max(12, int(std::lround(576 * options.imageScale)));
+    const Point soil{0.30, 0.24, 0.16}, grey{0.45, 0.45, 0.47};
+    const double pi = std::numbers::pi;
 
-    constexpr int kHillCells = 12;
-    writeHillObj(options.outputDirectory / "hill.obj", kHillCells);
-    report.hillFaces = kHillCells * kHillCells;
+    // Base meshes.
+    writeGridObj(inputs / "hill-1404.obj", 36, 39, false, false, hill(9, 9.75, 3, 40), "Fig. 7, a hill");
+    writeGridObj(inputs / "field-50x500.obj", 10, 100, false, false,
+                 [](double u, double v) { return Point{10 * u, 100 * v, 0}; }, "Fig. 6, a flat region");
+    writeGridObj(inputs / "torus-240.obj", 20, 12, true, true,
+                 [pi](double u, double v) {
+                     const double a = 2 * pi * u, b = 2 * pi * v, r = 2 + 0.8 * std::cos(b);
+                     return Point{r * std::cos(a), r * std::sin(a), 0.8 * std::sin(b)};
+                 },
+                 "Fig. 10, a torus");
+    writeGridObj(inputs / "hill-578.obj", 17, 34, false, false, hill(6, 12, 2.5, 30), "Fig. 9, a hill");
+    writeGridObj(inputs / "plane-81.obj", 9, 9, false, false,
+                 [](double u, double v) { return Point{9 * u - 4.5, 9 * v - 4.5, 0}; }, "Fig. 11, a plane");
+    writeGridObj(inputs / "quad.obj", 1, 1, false, false,
+                 [](double u, double v) { return Point{2 * u - 1, 2 * v - 1, 0}; }, "one face");
 
-    for (const std::string& name : names) {
-        DemoPattern result;
-        result.name = name;
-        const std::filesystem::path stem = options.outputDirectory / name;
+    // Scenes, one per figure.
+    writeScene(inputs / "fig7-grass-hill.toml", "Fig. 7, grass on a hill of 1404 faces", {{0, -19, 4.2}, {0, 0, 1.4}, 40},
+               width, height, "hill-1404.obj", 0.3, {2, 2}, soil);
+    writeScene(inputs / "fig6-bush-field.toml", "Fig. 6, bushes tiling a 50x500 region to the horizon",
+               {{5, -1.5, 0.9}, {5, 30, 0}, 50}, width, height, "field-50x500.obj", 0.2, {5, 5}, soil);
+    writeScene(inputs / "fig10-fur-torus.toml", "Fig. 10, fur on a torus of 240 faces", {{0, -6.2, 4.2}, {0, 0, 0}, 40},
+               width, height, "torus-240.obj", 0.15, {2, 1}, grey);
+    writeScene(inputs / "fig9-forest-hill.toml", "Fig. 9, a forest on a hill of 578 faces",
+               {{0, -25, 10}, {0, 0, 0.8}, 40}, width, height, "hill-578.obj", 0.7, {1, 1}, soil);
+    writeScene(inputs / "fig11-blocks.toml", "Fig. 11, building elements on 81 faces", {{0, -9.5, 6.5}, {0, 0, 0}, 40},
+               width, height, "plane-81.obj", 1.0, {1, 1}, grey);
+    writeScene(inputs / "fig1-brushed.toml", "Fig. 1, one texel of brushed aluminium", {{0, -2.6, 2.8}, {0, 0, 0.4}, 40},
+               height, height, "quad.obj", 1.0, {1, 1}, grey);
+    writeScene(inputs / "fig4-bush.toml", "Fig. 4, one texel at successive octree levels", {{0, -3.2, 2.6}, {0, 0, 0.8}, 40},
+               height, height, "quad.obj", 2.0, {1, 1}, soil);
 
-        auto t = Clock::now();
-        sampler::PatternOptions patternOptions;
-        patternOptions.seed = options.seed;
-        const ingest::TriangleMesh generated = sampler::makePattern(name, patternOptions);
-        ingest::writeMeshGlb(generated, stem.string() + ".glb");
-        result.files.push_back(stem.string() + ".glb");
-        result.secondsPattern = secondsSince(t);
+    // The pipeline.
+    std::ostringstream p;
+    p << "# vtex demo: the paper's showcase, rebuilt from the procedural patterns\n"
+      << "[pipeline]\noutput = \"..\"\n\n";
+    for (const char* pattern : {"grass", "bush", "fur", "brushed", "blocks"})
+        p << "[[source]]\nname = \"" << pattern << "\"\npattern = \"" << pattern << "\"\nseed = " << options.seed << "\n\n";
+    for (const char* pattern : {"grass", "bush", "fur", "brushed", "blocks"})
+        p << "[[texel]]\nname = \"" << pattern << "\"\nsource = \"" << pattern << "\"\nresolution = "
+          << options.maxResolution << "\n\n";
+    auto render = [&](const std::string& name, const std::string& scene, const std::string& texel, double bias = 0) {
+        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\ntexels = { cover = \"" << texel
+          << "\" }\nlod_bias = " << bias << "\n\n";
+    };
+    render("fig7-grass-hill", "fig7-grass-hill.toml", "grass");
+    render("fig6-bush-field", "fig6-bush-field.toml", "bush");
+    render("fig10-fur-torus", "fig10-fur-torus.toml", "fur");
+    render("fig9-forest-hill", "fig9-forest-hill.toml", "bush");
+    render("fig11-blocks", "fig11-blocks.toml", "blocks");
+    render("fig1-brushed", "fig1-brushed.toml", "brushed");
+    for (int bias = 0; bias < 4; ++bias)
+        render("fig4-level-minus-" + std::to_string(bias), "fig4-bush.toml", "bush", bias);
+    for (int bias = 1; bias < 4; ++bias)
+        p << "[[compare]]\nname = \"fig4-level-minus-" << bias << "-vs-finest\"\na = \"fig4-level-minus-0\"\nb = "
+          << "\"fig4-level-minus-" << bias << "\"\n\n";
+    writeFileAtomically(inputs / "pipeline.toml", p.str());
 
-        // Read the pattern back as a user's file: the demo exercises the same path.
-        t = Clock::now();
-        const ingest::TriangleMesh mesh = ingest::loadMesh(stem.string() + ".glb");
-        result.triangles = mesh.triangles.size();
-        result.secondsIngest = secondsSince(t);
-
-        t = Clock::now();
-        sampler::SampleOptions sampleOptions;
-        sampleOptions.resolution = options.resolution;
-        sampleOptions.cyclic = sampler::isCyclicPattern(name);
-        const octree::SparseVolume volume = sampler::sampleMesh(mesh, sampleOptions, progress);
-        octree::writeVtl(volume, stem.string() + ".vtl");
-        result.files.push_back(stem.string() + ".vtl");
-        result.sourceArea = volume.info.sourceArea;
-        result.occupiedVoxels = volume.blocks.size();
-        result.fitErrorMean = volume.info.fitError.mean;
-        result.secondsSample = secondsSince(t);
-
-        t = Clock::now();
-        octree::BuildOptions buildOptions;
-        buildOptions.rule = octree::FilterRule::Neyret;
-        const octree::Octree neyret = octree::buildOctree(volume, buildOptions, progress);
-        buildOptions.rule = octree::FilterRule::Sggx;
-        const octree::Octree sggx = octree::buildOctree(volume, buildOptions, progress);
-        octree::writeVto(neyret, stem.string() + "-neyret.vto");
-        octree::writeVto(sggx, stem.string() + "-sggx.vto");
-        result.files.push_back(stem.string() + "-neyret.vto");
-        result.files.push_back(stem.string() + "-sggx.vto");
-        result.secondsBuild = secondsSince(t);
-
-        // Cover the hill with the texel and render it (one ray per pixel, the fast shading).
-        t = Clock::now();
-        const std::filesystem::path scene = options.outputDirectory / (name + "-hill.toml");
-        const double faceWidth = 2.0 / kHillCells;
-        writeHillScene(scene, name, name + "-sggx.vto", name + ".glb", 0.6 * faceWidth,
-                       sampleOptions.cyclic);
-        render::RenderOptions renderOptions;
-        const render::RenderResult rendered = render::renderScene(render::loadScene(scene), renderOptions, progress);
-        render::writeExr(rendered.image, stem.string() + "-hill.exr");
-        render::writePng(rendered.image, stem.string() + "-hill.png");
-        render::writeStatsJson(rendered.stats, stem.string() + "-hill-stats.json");
-        for (const char* suffix : {"-hill.toml", "-hill.exr", "-hill.png", "-hill-stats.json"})
-            result.files.push_back(stem.string() + suffix);
-        result.secondsRender = secondsSince(t);
-        result.meanLevel = rendered.stats.meanLevel();
-        result.rays = rendered.stats.primaryRays + rendered.stats.shadowRays;
-
-        result.compressionNeyret = neyret.compression();
-        result.compressionSggx = sggx.compression();
-        for (std::uint32_t level = 0; level < sggx.levelCount(); ++level) {
-            DemoLevel l;
-            l.level = level;
-            l.storedNodes = sggx.stats[level].storedNodes;
-            l.meanDensity = sggx.stats[level].meanDensity;
-            l.filterErrorNeyret = neyret.stats[level].filterErrorMean;
-            l.filterErrorSggx = sggx.stats[level].filterErrorMean;
-            result.levels.push_back(l);
-        }
-        report.patterns.push_back(std::move(result));
-    }
-
-    report.seconds = secondsSince(start);
-    report.summaryFile = options.outputDirectory / "demo.json";
-    writeFileAtomically(report.summaryFile, toJson(report).dump(2) + "\n");
-    return report;
+    RunOptions run = options.run;
+    run.output = options.outputDirectory;
+    run.force = options.force;
+    return runPipeline(loadPipeline(inputs / "pipeline.toml"), run);
 }
 
-std::string formatDemoReport(const DemoReport& report) {
+std::string formatDemoReport(const RunReport& report) {
     std::ostringstream out;
-    char line[256];
-    std::snprintf(line, sizeof line, "vtex demo: %zu patterns sampled at %u³, built with both filter rules\n\n",
-                  report.patterns.size(), report.options.resolution);
+    char line[320];
+    int ran = 0, cached = 0;
+    for (const auto& s : report.stages) {
+        ran += s.status == StageRecord::Status::Ran;
+        cached += s.status == StageRecord::Status::Cached;
+    }
+    std::snprintf(line, sizeof line, "vtex demo: %zu stages (%d run, %d cached) in %.1f s\n\n", report.stages.size(),
+                  ran, cached, report.seconds);
     out << line;
-    std::snprintf(line, sizeof line, "%-8s %9s %10s %9s %11s %11s %14s %8s\n", "pattern", "triangles",
-                  "voxels", "fit err", "compr neyr", "compr sggx", "lvl0 err n/s", "seconds");
-    out << line;
-    for (const DemoPattern& p : report.patterns) {
-        const DemoLevel& root = p.levels.front();
-        std::snprintf(line, sizeof line, "%-8s %9llu %10llu %9.4f %10.2f%% %10.2f%% %6.3f/%-6.3f %8.2f\n",
-                      p.name.c_str(), (unsigned long long)p.triangles, (unsigned long long)p.occupiedVoxels,
-                      p.fitErrorMean, 100 * p.compressionNeyret, 100 * p.compressionSggx,
-                      root.filterErrorNeyret, root.filterErrorSggx,
-                      p.secondsPattern + p.secondsIngest + p.secondsSample + p.secondsBuild + p.secondsRender);
+    for (const auto& s : report.stages) {
+        if (s.detailsJson.empty() || (s.kind != "build" && s.kind != "render" && s.kind != "compare")) continue;
+        const auto d = nlohmann::json::parse(s.detailsJson);
+        if (s.kind == "build")
+            std::snprintf(line, sizeof line, "  texel  %-26s %2zu levels, %9llu nodes stored, compression %.2f%%\n",
+                          s.name.c_str(), d["levels"].size(), (unsigned long long)d["stored_nodes"].get<std::uint64_t>(),
+                          100 * d["compression"].get<double>());
+        else if (s.kind == "render")
+            std::snprintf(line, sizeof line, "  render %-26s %4dx%-4d %6.2f s, mean octree level %.2f -> renders/%s.png\n",
+                          s.name.c_str(), d.value("width", 0), d.value("height", 0), d.value("wall_seconds", 0.0),
+                          d.value("mean_level", -1.0), s.name.c_str());
+        else
+            std::snprintf(line, sizeof line, "  compare %-25s RMSE %.4f, SSIM %.4f\n", s.name.c_str(),
+                          d["rmse"].get<double>(), d["ssim"].get<double>());
         out << line;
     }
-    out << "\nFilter error per level (mean over the level's nodes; neyret / sggx):\n";
-    for (const DemoPattern& p : report.patterns) {
-        out << "  " << p.name << ":";
-        for (const DemoLevel& l : p.levels) {
-            std::snprintf(line, sizeof line, " L%u %.3f/%.3f", l.level, l.filterErrorNeyret, l.filterErrorSggx);
-            out << line;
-        }
-        out << "\n";
-    }
-    out << "\nRenders of the hill (" << report.hillFaces << " faces) covered with each texel, 384x288, 1 ray per pixel:\n";
-    for (const DemoPattern& p : report.patterns) {
-        std::snprintf(line, sizeof line, "  %-8s %6.2f s  mean octree level %.2f  %llu rays  -> %s-hill.png\n",
-                      p.name.c_str(), p.secondsRender, p.meanLevel, (unsigned long long)p.rays, p.name.c_str());
-        out << line;
-    }
-    std::snprintf(line, sizeof line, "\nWrote %zu files to %s (summary: %s) in %.1f s.\n",
-                  [&] {
-                      std::size_t n = 2;  // demo.json and hill.obj
-                      for (const auto& p : report.patterns) n += p.files.size();
-                      return n;
-                  }(),
-                  report.options.outputDirectory.string().c_str(), report.summaryFile.string().c_str(),
-                  report.seconds);
-    out << line;
-    out << "Not yet part of the demo: the explicit-geometry reference renders and the error-against-run-time "
-           "report (the reference renderer is not built yet).\n";
+    for (const auto& o : report.leftOut) out << "  left out: " << o.texel << ": " << o.reason << "\n";
+    for (const auto& s : report.stages)
+        if (s.status == StageRecord::Status::Failed) out << "  FAILED " << s.kind << " " << s.name << ": " << s.message << "\n";
+    out << "\nReport: " << report.reportHtml.string() << " (and report.json); inputs to edit and re-run with "
+        << "`vtex run`: " << (report.output / "inputs" / "pipeline.toml").string() << "\n"
+        << "Not yet part of the demo: explicit-geometry reference renders and the error-against-run-time table "
+           "(`vtex reference` is not built yet).\n";
     return out.str();
 }
 

@@ -1,68 +1,40 @@
 /// @file
-/// @brief `vtex demo`: the built-in showcase, from procedural patterns to texels, needing no
-/// input files.
+/// @brief `vtex demo`: the paper's showcase rebuilt from the procedural patterns, as a built-in
+/// pipeline that needs no input files.
 ///
-/// Today it runs every stage that exists: each of the paper's patterns is generated, written as
-/// the canonical .glb, read back through ingest (as any user file would be), sampled into the
-/// finest level (.vtl), built into an octree with both filter rules (.vto), and rendered on a
-/// hill of 144 bilinear faces (a scene file per texel, written beside the images so that
-/// `vtex render` can redo them). The summary lists, per pattern, what was made and what it
-/// cost, and is also written as demo.json.
+/// The demo writes its inputs — base meshes generated here, one scene file per figure and a
+/// pipeline.toml — into <output>/inputs and runs that pipeline with runPipeline(), so it is
+/// cached, leaves out what its renders do not need and ends with the same report.json and
+/// report.html as `vtex run`. A user can edit the inputs and re-run them with `vtex run`.
+///
+/// The figures (Neyret 1994): Fig. 7 grass on a hill of 1404 bilinear faces; Fig. 6 bushes
+/// tiling a 50×500 region to the horizon; Fig. 10 fur on a torus of 240 faces; Fig. 9 a forest
+/// on a hill of 578 faces; Fig. 11 building elements on 81 faces; Fig. 1 one texel of brushed
+/// aluminium; Fig. 4 one texel at four successive octree levels, each compared with the finest.
 #pragma once
 
-#include <vtex/core/progress.h>
+#include <vtex/pipelines/pipeline.h>
 
 #include <cstdint>
 #include <filesystem>
 #include <string>
-#include <vector>
 
 namespace vtex::pipelines {
 
 struct DemoOptions {
     std::filesystem::path outputDirectory = "demo-out";
-    std::uint32_t resolution = 64;  ///< finest voxels per side (a power of two)
-    std::uint64_t seed = 1;
-    /// Patterns to run, by name; empty = all of them.
-    std::vector<std::string> patterns;
+    std::uint32_t maxResolution = 128;  ///< cap on each texel's finest voxels per side (a power of two)
+    double imageScale = 0.5;            ///< image size relative to video resolution (768×576)
+    std::uint64_t seed = 1;             ///< of the procedural patterns
+    bool force = false;                 ///< redo every stage
+    RunOptions run;                     ///< log, jobs (the output and force fields are set from the above)
 };
 
-struct DemoLevel {
-    std::uint32_t level = 0;
-    std::uint64_t storedNodes = 0;
-    double meanDensity = 0;
-    double filterErrorNeyret = 0;  ///< mean filter error of the level's nodes, neyret rule
-    double filterErrorSggx = 0;    ///< same, sggx rule
-};
-
-struct DemoPattern {
-    std::string name;
-    std::uint64_t triangles = 0;
-    double sourceArea = 0;            ///< reference units²
-    std::uint64_t occupiedVoxels = 0; ///< stored blocks of the finest level
-    double fitErrorMean = 0;
-    double compressionNeyret = 0;     ///< 1 − stored / N³
-    double compressionSggx = 0;
-    std::vector<DemoLevel> levels;
-    double secondsPattern = 0, secondsIngest = 0, secondsSample = 0, secondsBuild = 0, secondsRender = 0;
-    double meanLevel = 0;     ///< of the hill render's level choices
-    std::uint64_t rays = 0;   ///< primary and shadow rays of the hill render
-    std::vector<std::filesystem::path> files;  ///< the artifacts written
-};
-
-struct DemoReport {
-    DemoOptions options;
-    std::vector<DemoPattern> patterns;
-    double seconds = 0;
-    int hillFaces = 0;                  ///< bilinear faces of the base surface
-    std::filesystem::path summaryFile;  ///< demo.json
-};
-
-/// Runs the demo. Throws vtex::IoError when the output directory cannot be written,
-/// std::invalid_argument for an unknown pattern or a bad resolution.
-DemoReport runDemo(const DemoOptions& options, Progress& progress);
+/// Writes the demo's inputs and runs them. Throws vtex::IoError when the output directory cannot
+/// be written; returns the pipeline's report (check succeeded()).
+RunReport runDemo(const DemoOptions& options);
 
 /// The human summary printed by `vtex demo`.
-std::string formatDemoReport(const DemoReport& report);
+std::string formatDemoReport(const RunReport& report);
 
 }  // namespace vtex::pipelines
