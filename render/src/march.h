@@ -51,6 +51,47 @@ inline Located locate(const octree::Octree& tree, int level, std::uint32_t x, st
     return {node, l};
 }
 
+/// The path from the root to the node last located, so that the next lookup starts from the
+/// deepest ancestor the two voxels share instead of the root: consecutive steps of a march are
+/// neighbours, and most of them share all but the last level or two. The answer is the same as
+/// locate()'s.
+struct LocateCursor {
+    std::array<const octree::OctreeNode*, 32> path{};
+    int depth = -1;  ///< path[0..depth] valid; −1: nothing located yet
+    std::uint32_t x = 0, y = 0, z = 0;
+
+    Located find(const octree::Octree& tree, int level, std::uint32_t nx, std::uint32_t ny, std::uint32_t nz) {
+        int l = 0;
+        if (depth < 0) {
+            path[0] = &tree.levels[0][0];
+            depth = 0;
+        } else {
+            const std::uint32_t diff = (nx ^ x) | (ny ^ y) | (nz ^ z);
+            // Ancestors at levels l ≤ level − bit_width(diff) hold both voxels.
+            l = std::min(depth, level - int(std::bit_width(diff)));
+        }
+        x = nx;
+        y = ny;
+        z = nz;
+        const octree::OctreeNode* node = path[std::size_t(l)];
+        while (l < level && !node->isLeaf()) {
+            const int shift = level - l - 1;
+            const unsigned c = ((nx >> shift) & 1u) | (((ny >> shift) & 1u) << 1) | (((nz >> shift) & 1u) << 2);
+            if (!(node->childMask & (1u << c))) {
+                depth = l;
+                return {nullptr, l + 1};
+            }
+            const unsigned before = kBitsBelow[node->childMask][c];
+            node = &tree.levels[std::size_t(l + 1)][node->firstChild + before];
+            ++l;
+            path[std::size_t(l)] = node;
+        }
+        depth = l;
+        if (node->data.isEmpty()) return {nullptr, l};
+        return {node, l};
+    }
+};
+
 /// Marches p0 + s·dir, s ∈ [0, length] (reference units, dir unit), at `level`, calling
 /// visit(node, s0, ds) for every non-empty block in front-to-back order; visit returns false to
 /// stop. Returns the number of blocks stepped through (empty ones included).
@@ -58,7 +99,7 @@ template <class Visit>
 std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Vector3d& p0,
                           const Eigen::Vector3d& dir, double length, Visit&& visit) {
     if (tree.levels.empty() || tree.levels[0].empty() || !(length > 0)) return 0;
-    level = std::clamp(level, 0, int(tree.levels.size()) - 1);
+    level = std::clamp(level, 0, std::min(int(tree.levels.size()) - 1, 30));
     const std::int64_t n = std::int64_t(1) << level;
     const double invN = 1.0 / double(n);
     // Every step looks the block up a little past its entry so that a point on a block face
@@ -70,6 +111,7 @@ std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Ve
     const double extent = std::abs(dir.x()) * length + std::abs(dir.y()) * length + std::abs(dir.z()) * length;
     const std::uint64_t maxSteps = std::uint64_t(std::min(1e7, 3 * (extent + 3) * double(n) + 64));
     std::uint64_t steps = 0;
+    LocateCursor cursor;
     double s = 0;
     while (s < length && steps < maxSteps) {
         ++steps;
@@ -81,13 +123,13 @@ std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Ve
             idx[a] = std::int64_t(std::clamp(f, -4e15, 4e15));
         }
         idx[2] = std::clamp<std::int64_t>(idx[2], 0, n - 1);
-        const std::uint32_t wx = std::uint32_t(((idx[0] % n) + n) % n);
-        const std::uint32_t wy = std::uint32_t(((idx[1] % n) + n) % n);
-        const Located found = locate(tree, level, wx, wy, std::uint32_t(idx[2]));
+        // n and the block sizes are powers of two: masks instead of (slow) integer divisions;
+        // on two's complement, idx & (n − 1) is the non-negative idx mod n.
+        const std::uint32_t wx = std::uint32_t(idx[0] & (n - 1));
+        const std::uint32_t wy = std::uint32_t(idx[1] & (n - 1));
+        const Located found = cursor.find(tree, level, wx, wy, std::uint32_t(idx[2]));
         const std::int64_t size = std::int64_t(1) << (level - found.blockLevel);
-        const std::int64_t base[3] = {idx[0] - std::int64_t(wx % std::uint32_t(size)),
-                                      idx[1] - std::int64_t(wy % std::uint32_t(size)),
-                                      idx[2] - (idx[2] % size)};
+        const std::int64_t base[3] = {idx[0] & ~(size - 1), idx[1] & ~(size - 1), idx[2] & ~(size - 1)};
         double exit = length;
         for (int a = 0; a < 3; ++a) {
             if (dir[a] > 0) exit = std::min(exit, (double(base[a] + size) * invN - p0[a]) * invDir[a]);

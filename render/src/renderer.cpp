@@ -322,12 +322,28 @@ private:
             double transmittance = 1;
         };
         const double startT = state.transmittance;
-        const auto run = [&](int level) {
+        const std::size_t lights = std::min<std::size_t>(mScene.lights.size(), 16);
+        // The shadow rays of the first (coarse) march, by light: where along the span they were
+        // taken and what they found. When the second (fine) march of the blend needs a shadow
+        // (same rule: first lit voxel, then each time its transmittance has fallen to a
+        // quarter), it takes the coarse march's nearest one if that was taken within one coarse
+        // voxel of here, instead of casting its own: shadow rays are the costliest part of a
+        // march, and the two levels see the same light through the same texel. An
+        // approximation (the origin moves by at most a coarse voxel), bounded by the test
+        // SharedShadowRaysMatchPerLevelShadowRays.
+        const double shareDistance = 1.0 / double(std::int64_t(1) << choice.coarse);
+        constexpr int kTrackCapacity = 32;
+        struct ShadowTrack {
+            int count = 0;
+            std::array<double, kTrackCapacity> s, t;
+        };
+        std::array<ShadowTrack, 16> tracks;
+        const auto run = [&](int level, bool record) {
             Result r;
             std::array<double, 16> shadowT{};
             std::array<double, 16> shadowAt{};  // local transmittance when the shadow was taken
             std::array<bool, 16> shadowValid{};
-            const std::size_t lights = std::min<std::size_t>(mScene.lights.size(), 16);
+            std::array<int, 16> reuseAt{};      // reuse: index of the track's current ray
             counters.voxels += detail::marchBlocks(*texel.tree, level, p0, dir, length,
                 [&](const octree::OctreeNode& node, double s, double ds) {
                     const auto& data = node.data;
@@ -351,8 +367,29 @@ private:
                         // transmittance has fallen to a quarter since: the shadow varies with
                         // depth into the texel, not from voxel to voxel.
                         if (!shadowValid[i] || r.transmittance < 0.25 * shadowAt[i]) {
-                            shadowT[i] = shadowTransmittance(x, lw, distance, kShadowConeScale * mConeSpread * tWorld,
-                                                             int(&prim - mTracer.prims().data()), rc, counters);
+                            ShadowTrack& track = tracks[i];
+                            int nearest = -1;
+                            if (!record) {
+                                // Samples are in increasing s: resume the scan where it stopped.
+                                int& k = reuseAt[i];
+                                while (k + 1 < track.count && track.s[std::size_t(k + 1)] <= sm) ++k;
+                                for (int c = k; c <= std::min(k + 1, track.count - 1); ++c)
+                                    if (std::abs(track.s[std::size_t(c)] - sm) <= shareDistance &&
+                                        (nearest < 0 || std::abs(track.s[std::size_t(c)] - sm) <
+                                                            std::abs(track.s[std::size_t(nearest)] - sm)))
+                                        nearest = c;
+                            }
+                            if (nearest >= 0) {
+                                shadowT[i] = track.t[std::size_t(nearest)];
+                            } else {
+                                shadowT[i] = shadowTransmittance(x, lw, distance, kShadowConeScale * mConeSpread * tWorld,
+                                                                 int(&prim - mTracer.prims().data()), rc, counters);
+                                if (record && track.count < kTrackCapacity) {
+                                    track.s[std::size_t(track.count)] = sm;
+                                    track.t[std::size_t(track.count)] = shadowT[i];
+                                    ++track.count;
+                                }
+                            }
                             shadowAt[i] = r.transmittance;
                             shadowValid[i] = true;
                         }
@@ -373,9 +410,9 @@ private:
                 });
             return r;
         };
-        Result result = run(choice.coarse);
+        Result result = run(choice.coarse, mOptions.shareShadowRays);
         if (choice.fineWeight > 0) {
-            const Result fine = run(choice.fine);
+            const Result fine = run(choice.fine, false);
             const double w = choice.fineWeight;
             result.radiance = (1 - w) * result.radiance + w * fine.radiance;
             result.transmittance = (1 - w) * result.transmittance + w * fine.transmittance;

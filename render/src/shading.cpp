@@ -4,6 +4,7 @@
 
 #include <vtex/octree/voxel.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -36,7 +37,7 @@ namespace {
 
 // Fixed points on the unit disc: a Fibonacci lattice, radius √((i+½)/n) for equal areas.
 struct DiscLattice {
-    std::array<double, 64> x{}, y{};
+    std::array<double, 64> x{}, y{}, z{};  ///< z: the point lifted onto the hemisphere
     int n = 0;
     explicit DiscLattice(int count) : n(count) {
         const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
@@ -44,9 +45,36 @@ struct DiscLattice {
             const double r = std::sqrt((i + 0.5) / n);
             x[std::size_t(i)] = r * std::cos(golden * i);
             y[std::size_t(i)] = r * std::sin(golden * i);
+            z[std::size_t(i)] = std::sqrt(std::max(0.0, 1 - x[std::size_t(i)] * x[std::size_t(i)] - y[std::size_t(i)] * y[std::size_t(i)]));
         }
     }
 };
+
+// xⁿ for the Phong exponent: by repeated squaring when n is a small whole number (the usual
+// case; exact to a few ulps, ~6 multiplies instead of a libm pow), std::pow otherwise.
+struct PhongPower {
+    double n;
+    int whole;  ///< n when it is a whole number in [0, 1024], else −1
+    explicit PhongPower(double exponent)
+        : n(exponent), whole(exponent >= 0 && exponent <= 1024 && exponent == std::floor(exponent) ? int(exponent) : -1) {}
+    double operator()(double x) const {
+        if (whole < 0) return std::pow(x, n);
+        double result = 1, base = x;
+        for (int e = whole; e > 0; e >>= 1) {
+            if (e & 1) result *= base;
+            base *= base;
+        }
+        return result;
+    }
+};
+
+// pow(1e-6, 1/n) for whole n ≤ 64 (n = 0 unused), beyond which n is clamped to 64: a lower
+// cut-off only keeps more terms.
+const std::array<double, 65> kCosCutoffs = [] {
+    std::array<double, 65> c{};
+    for (int n = 1; n <= 64; ++n) c[std::size_t(n)] = std::pow(1e-6, 1.0 / n);
+    return c;
+}();
 
 const DiscLattice& lattice(int samples) {
     static const DiscLattice l8(8), l16(16), l32(32), l64(64);
@@ -84,10 +112,11 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
     double diffuse = 0, specular = 0;
     const double specularNorm = (shininess + 2) / (2 * std::numbers::pi);
     // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
-    const double cosCutoff = shininess > 0 ? std::pow(1e-6, 1 / shininess) : 0.0;
+    const PhongPower power(shininess);
+    const double cosCutoff = shininess <= 0 ? 0.0 : power.whole >= 0 ? kCosCutoffs[std::size_t(std::min(power.whole, 64))] : std::pow(1e-6, 1 / shininess);
     for (int n = 0; n < points.n; ++n) {
         const double u = points.x[std::size_t(n)], v = points.y[std::size_t(n)];
-        const double w = std::sqrt(std::max(0.0, 1 - u * u - v * v));
+        const double w = points.z[std::size_t(n)];
         Vector3d m = u * Mk + v * Mj + w * Mi;
         const double len = m.norm();
         if (!(len > 0)) continue;
@@ -97,7 +126,7 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
         diffuse += nl;
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
         const double cosAlpha = 2 * nl * m.z() - lv;
-        if (cosAlpha > cosCutoff) specular += nl * std::pow(cosAlpha, shininess);
+        if (cosAlpha > cosCutoff) specular += nl * power(cosAlpha);
     }
     return {diffuse / (points.n * std::numbers::pi), specular * specularNorm / points.n};
 }

@@ -39,6 +39,9 @@ struct RenderOptions {
     ShadingMode shading = ShadingMode::Fast;
     bool aovs = false;    ///< fill Image::depth and Image::level
     int referenceSamples = 24;  ///< samplesPerAxis of the reference reflectance
+    /// The second level of a blend reuses the first level's shadow rays (docs/render.md); false:
+    /// each level casts its own (slower; the exact path the approximation is tested against).
+    bool shareShadowRays = true;
 };
 
 struct RenderStats {
