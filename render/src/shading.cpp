@@ -114,18 +114,23 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
     // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
     const PhongPower power(shininess);
     const double cosCutoff = shininess <= 0 ? 0.0 : power.whole >= 0 ? kCosCutoffs[std::size_t(std::min(power.whole, 64))] : std::pow(1e-6, 1 / shininess);
+    // m = u·Mk + v·Mj + w·Mi with Mk = (·,0,0), Mj = (·,·,0): written out, and N·l tested on
+    // the unnormalised m so that facets in their own shadow skip the square root.
     for (int n = 0; n < points.n; ++n) {
         const double u = points.x[std::size_t(n)], v = points.y[std::size_t(n)];
         const double w = points.z[std::size_t(n)];
-        Vector3d m = u * Mk + v * Mj + w * Mi;
-        const double len = m.norm();
-        if (!(len > 0)) continue;
-        m /= len;
-        const double nl = m.dot(l);
-        if (nl <= 0) continue;  // facet in its own shadow
+        const double mx = u * Mk.x() + v * Mj.x() + w * Mi.x();
+        const double my = v * Mj.y() + w * Mi.y();
+        const double mz = w * Mi.z();
+        const double ml = mx * l.x() + my * l.y() + mz * l.z();
+        if (!(ml > 0)) continue;  // facet in its own shadow (or a degenerate m)
+        const double len2 = mx * mx + my * my + mz * mz;
+        if (!(len2 > 0)) continue;
+        const double invLen = 1 / std::sqrt(len2);
+        const double nl = ml * invLen;
         diffuse += nl;
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
-        const double cosAlpha = 2 * nl * m.z() - lv;
+        const double cosAlpha = 2 * nl * (mz * invLen) - lv;
         if (cosAlpha > cosCutoff) specular += nl * power(cosAlpha);
     }
     return {diffuse / (points.n * std::numbers::pi), specular * specularNorm / points.n};
