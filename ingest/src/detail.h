@@ -92,7 +92,4 @@ std::optional<std::vector<char>> computeOutwardFlips(
 std::optional<Image> decodeImage(std::string_view bytes, const IngestOptions& options,
                                  std::string& why);
 
-/// Encodes 8-bit RGBA as PNG. Throws std::runtime_error on a libpng failure.
-std::string encodePng(const Image& image);
-
 }  // namespace vtex::ingest::detail

@@ -111,7 +111,7 @@ std::string encodeMeshGlb(const TriangleMesh& mesh) {
 
     // Textures, embedded as PNG.
     for (const Image& image : mesh.textures) {
-        const std::string png = detail::encodePng(image);
+        const std::string png = encodePng(image);
         tinygltf::Image gltfImage;
         gltfImage.bufferView = appendView(model, png.data(), png.size(), 0);
         gltfImage.mimeType = "image/png";

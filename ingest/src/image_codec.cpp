@@ -155,6 +155,10 @@ std::optional<Image> decodeImage(std::string_view bytes, const IngestOptions& op
     return std::nullopt;
 }
 
+}  // namespace vtex::ingest::detail
+
+namespace vtex::ingest {
+
 std::string encodePng(const Image& image) {
     if (image.width <= 0 || image.height <= 0 ||
         image.rgba.size() != std::size_t(image.width) * image.height * 4)
@@ -175,4 +179,4 @@ std::string encodePng(const Image& image) {
     return out;
 }
 
-}  // namespace vtex::ingest::detail
+}  // namespace vtex::ingest

@@ -1,5 +1,7 @@
-// EXR (OpenEXR 3, 32-bit float channels) and PNG (libpng's simplified API) files of an Image.
+// EXR (OpenEXR 3, 32-bit float channels) and PNG (through ingest's libpng encoder) files of an Image.
 #include <vtex/render/image.h>
+
+#include <vtex/ingest/mesh.h>
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
@@ -9,11 +11,9 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
-#include <png.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 namespace vtex::render {
 
@@ -95,28 +95,24 @@ double linearToSrgb(double x) {
 }
 
 void writePng(const Image& image, const std::filesystem::path& file) {
-    std::vector<unsigned char> pixels(image.pixels() * 4);
+    ingest::Image display;
+    display.width = image.width;
+    display.height = image.height;
+    display.rgba.resize(image.pixels() * 4);
     for (std::size_t i = 0; i < image.pixels(); ++i) {
         for (int c = 0; c < 3; ++c) {
             const double v = std::isfinite(image.rgba[4 * i + c]) ? image.rgba[4 * i + c] : 0.0;
-            pixels[4 * i + c] = (unsigned char)std::lround(255 * linearToSrgb(v));
+            display.rgba[4 * i + c] = std::uint8_t(std::lround(255 * linearToSrgb(v)));
         }
         const double a = std::clamp(double(image.rgba[4 * i + 3]), 0.0, 1.0);
-        pixels[4 * i + 3] = (unsigned char)std::lround(255 * (std::isfinite(a) ? a : 0.0));
+        display.rgba[4 * i + 3] = std::uint8_t(std::lround(255 * (std::isfinite(a) ? a : 0.0)));
     }
-    png_image png;
-    std::memset(&png, 0, sizeof png);
-    png.version = PNG_IMAGE_VERSION;
-    png.width = png_uint_32(image.width);
-    png.height = png_uint_32(image.height);
-    png.format = PNG_FORMAT_RGBA;
-    png_alloc_size_t size = 0;
-    if (!png_image_write_to_memory(&png, nullptr, &size, 0, pixels.data(), 0, nullptr))
-        throw IoError(file, std::string("cannot encode PNG: ") + png.message);
-    std::string bytes(size, '\0');
-    if (!png_image_write_to_memory(&png, bytes.data(), &size, 0, pixels.data(), 0, nullptr))
-        throw IoError(file, std::string("cannot encode PNG: ") + png.message);
-    bytes.resize(size);
+    std::string bytes;
+    try {
+        bytes = ingest::encodePng(display);
+    } catch (const std::runtime_error& e) {
+        throw IoError(file, std::string("cannot encode PNG: ") + e.what());
+    }
     writeFileAtomically(file, bytes);
 }
 

@@ -93,7 +93,9 @@ inline Scene baseScene(Eigen::Vector3d eye, Eigen::Vector3d target, double fov =
 
 inline std::size_t addTexel(Scene& scene, std::shared_ptr<const octree::Octree> tree, double tau = 1) {
     TexelDef t;
-    t.name = "t" + std::to_string(scene.texels.size());
+    // Not `"t" + std::to_string(…)` nor an assignment from a literal: GCC 12 warns falsely
+    // (-Wrestrict) on both once they are inlined here.
+    t.name = std::to_string(scene.texels.size()).insert(0, 1, 't');
     t.octree = std::move(tree);
     t.tau = tau;
     scene.texels.push_back(t);

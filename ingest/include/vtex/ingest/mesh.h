@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace vtex::ingest {
@@ -21,6 +22,10 @@ struct Image {
     int height = 0;
     std::vector<std::uint8_t> rgba;  ///< width · height · 4 bytes
 };
+
+/// PNG bytes of `image` (8-bit RGBA as stored, so sRGB stays sRGB). Throws std::runtime_error
+/// when its size does not match its pixels or libpng fails.
+std::string encodePng(const Image& image);
 
 struct Material {
     /// glTF baseColorFactor, linear RGBA.
