@@ -10,7 +10,7 @@ foreach(stage IN LISTS stages)
 endforeach()
 install(DIRECTORY ${PROJECT_BINARY_DIR}/generated/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 
-install(TARGETS ${stage_targets} vtex_warnings EXPORT vtexTargets
+install(TARGETS ${stage_targets} EXPORT vtexTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
