@@ -22,6 +22,10 @@ function(vtex_stage_library stage)
   target_link_libraries(vtex_${stage} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS}
                         $<BUILD_INTERFACE:vtex_warnings>)
   target_compile_features(vtex_${stage} PUBLIC cxx_std_20)
+  if(VTEX_SANITIZE)
+    # Instrumented static code needs the sanitizer runtimes wherever it is linked, installed too.
+    target_link_options(vtex_${stage} INTERFACE -fsanitize=address,undefined)
+  endif()
   set_property(GLOBAL APPEND PROPERTY VTEX_INSTALLED_STAGES ${stage})
 endfunction()
 
