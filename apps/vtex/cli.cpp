@@ -37,6 +37,21 @@ const Inspector* findInspector(const std::string& extension) {
     return found == registry.end() ? nullptr : &found->second;
 }
 
+CLI::Validator powerOfTwo(unsigned long long largest) {
+    return CLI::Validator(
+        [largest](std::string& text) -> std::string {
+            unsigned long long n = 0;
+            try {
+                n = std::stoull(text);
+            } catch (const std::exception&) {
+            }
+            if (n == 0 || (n & (n - 1)) != 0 || n > largest)
+                return "must be a power of two from 1 to " + std::to_string(largest);
+            return {};
+        },
+        "POWER OF TWO");
+}
+
 void status(const GlobalOptions& options, const std::string& line) {
     if (options.verbosity() != Verbosity::Quiet) std::cerr << line << '\n';
 }

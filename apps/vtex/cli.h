@@ -46,6 +46,9 @@ using Inspector = std::function<void(const std::filesystem::path& file, bool jso
 bool registerInspector(const std::string& extension, Inspector inspector);
 const Inspector* findInspector(const std::string& extension);
 
+/// Accepts a power of two from 1 to `largest` (voxel resolutions).
+CLI::Validator powerOfTwo(unsigned long long largest);
+
 /// Status lines and warnings go to stderr; stdout carries only what was asked for.
 void status(const GlobalOptions& options, const std::string& line);
 void warning(const GlobalOptions& options, const std::string& line);

@@ -18,12 +18,7 @@ const bool registered = registerCommand(90, [](CLI::App& app) -> Action {
     app.add_option("--resolution", options->maxResolution, "Largest texel resolution (a power of two)")
         ->capture_default_str()
         ->check(CLI::Range(4u, 1024u))
-        ->check(CLI::Validator(
-            [](std::string& value) {
-                const unsigned long n = std::stoul(value);
-                return (n & (n - 1)) == 0 ? std::string() : std::string("must be a power of two");
-            },
-            "POWER OF TWO"));
+        ->check(powerOfTwo(1024));
     app.add_option("--scale", options->imageScale, "Image size relative to 768x576")
         ->capture_default_str()
         ->check(CLI::Range(0.05, 4.0));

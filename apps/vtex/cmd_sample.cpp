@@ -32,15 +32,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
     app.add_option("-o,--output", flags->output, "Sampled volume to write (.vtl)")->required();
     app.add_option("-r,--resolution", flags->resolution, "Voxels per side N, a power of two")
         ->capture_default_str()
-        ->check([](const std::string& text) -> std::string {
-            try {
-                const unsigned long long n = std::stoull(text);
-                if (n == 0 || (n & (n - 1)) != 0 || n > (1ull << 20)) return "must be a power of two from 1 to 1048576";
-            } catch (...) {
-                return "must be a power of two";
-            }
-            return {};
-        });
+        ->check(powerOfTwo(1ull << 20));
     app.add_flag("--cyclic", flags->cyclic, "Periodic in x and y (tileable patterns: grass, fur)");
     app.add_option("--solid", flags->solid, "Fill the interior of closed meshes: auto (if closed), on, off")
         ->capture_default_str()

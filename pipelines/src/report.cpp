@@ -14,16 +14,6 @@ namespace {
 
 using Json = nlohmann::json;
 
-std::string statusName(StageRecord::Status s) {
-    switch (s) {
-        case StageRecord::Status::Ran: return "ran";
-        case StageRecord::Status::Cached: return "cached";
-        case StageRecord::Status::Failed: return "failed";
-        case StageRecord::Status::Skipped: return "skipped";
-    }
-    return "?";
-}
-
 std::string escapeHtml(const std::string& text) {
     std::string out;
     for (char c : text) {

@@ -85,16 +85,6 @@ void writeManifest(const Stage& stage, const fs::path& root, const Json& details
     writeFileAtomically(manifestPath(stage, root), manifest.dump(2) + "\n");
 }
 
-std::string statusWord(Status s) {
-    switch (s) {
-        case Status::Ran: return "ran";
-        case Status::Cached: return "cached";
-        case Status::Failed: return "failed";
-        case Status::Skipped: return "skipped";
-    }
-    return "?";
-}
-
 render::RenderOptions renderOptions(const RenderStep& step) {
     render::RenderOptions o;
     o.width = step.width;
@@ -113,6 +103,16 @@ std::string readText(const fs::path& file) {
 }
 
 }  // namespace
+
+std::string statusName(StageRecord::Status status) {
+    switch (status) {
+        case Status::Ran: return "ran";
+        case Status::Cached: return "cached";
+        case Status::Failed: return "failed";
+        case Status::Skipped: return "skipped";
+    }
+    return "?";
+}
 
 bool RunReport::succeeded() const {
     for (const auto& s : stages)
@@ -388,7 +388,7 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                     if (upstream == Status::Failed || upstream == Status::Skipped) {
                         stage.record.status = Status::Skipped;
                         stage.record.message = "not run: " + stages[input].kind + " '" + stages[input].name + "' " +
-                                               statusWord(upstream);
+                                               statusName(upstream);
                         std::lock_guard lock(logMutex);
                         log("skipped " + stage.kind + " " + stage.name + " (" + stage.record.message + ")");
                         return;

@@ -116,6 +116,9 @@ struct Omission {
     std::string reason;  ///< e.g. "sampled at 32³ instead of 128³: the finest level …"
 };
 
+/// "ran", "cached", "failed" or "skipped": the word the log and the reports use.
+std::string statusName(StageRecord::Status status);
+
 struct RunReport {
     std::filesystem::path output;
     std::vector<StageRecord> stages;
