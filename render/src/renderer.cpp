@@ -13,14 +13,12 @@
 #include <vtex/render/texel_march.h>
 
 #include "footprint.h"
+#include "frame.h"
 #include "march.h"
 #include "tracer.h"
 
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -41,9 +39,17 @@ double RenderStats::meanLevel() const {
 
 namespace {
 
+using detail::Counters;
 using detail::Hit;
 using detail::Prim;
+using detail::SurfaceRuntime;
 using detail::Tracer;
+using detail::bilerp;
+using detail::geometricNormal;
+using detail::lightAt;
+using detail::shadingNormal;
+
+double patchSize(const Prim& prim) { return detail::patchSize(prim.p); }
 
 constexpr double kTransmittanceCutoff = 1e-4;
 // Shadow rays from inside a texel march one level coarser than the camera ray (a cone twice as
@@ -55,27 +61,6 @@ struct TexelRuntime {
     int maxLevel = 0;
     double tau = 1;
     Material material;
-};
-
-struct SurfaceRuntime {
-    Material material;
-    int texel = -1;
-    double repeatU = 1, repeatV = 1;
-    double height = 0;
-};
-
-struct Counters {
-    std::uint64_t primary = 0, shadow = 0, segments = 0, voxels = 0, reflectance = 0;
-    std::vector<double> histogram;
-    void add(const Counters& o) {
-        primary += o.primary;
-        shadow += o.shadow;
-        segments += o.segments;
-        voxels += o.voxels;
-        reflectance += o.reflectance;
-        if (histogram.size() < o.histogram.size()) histogram.resize(o.histogram.size(), 0.0);
-        for (std::size_t i = 0; i < o.histogram.size(); ++i) histogram[i] += o.histogram[i];
-    }
 };
 
 struct PathState {
@@ -91,11 +76,6 @@ struct PathState {
         }
     }
 };
-
-// An offset along the normal that lifts a surface point clear of the rounding of its own
-// intersection (pbrt-v4's OffsetRayOrigin idea, with a bound relative to the coordinates and
-// to the local feature size rather than a propagated error).
-double offsetDistance(const Vec3& x, double scale) { return 1e-9 * x.cwiseAbs().maxCoeff() + 1e-6 * scale; }
 
 class Integrator {
 public:
@@ -140,35 +120,6 @@ public:
     }
 
 private:
-    static Vec3 bilerp(const std::array<Vec3, 4>& p, double u, double v) {
-        const Vec3 a = p[0] + u * (p[1] - p[0]);
-        const Vec3 b = p[2] + u * (p[3] - p[2]);
-        return a + v * (b - a);
-    }
-    static Vec3 geometricNormal(const std::array<Vec3, 4>& p, double u, double v, const std::array<Vec3, 4>& n) {
-        const Vec3 du = (1 - v) * (p[1] - p[0]) + v * (p[3] - p[2]);
-        const Vec3 dv = (1 - u) * (p[2] - p[0]) + u * (p[3] - p[1]);
-        Vec3 ng = du.cross(dv);
-        // At a triangle's collapsed corner the cross product vanishes: use the other corners'.
-        if (!(ng.squaredNorm() > 0) || !ng.allFinite()) ng = (p[1] - p[0]).cross(p[3] - p[0]);
-        if (!(ng.squaredNorm() > 0) || !ng.allFinite()) ng = bilerp(n, u, v);
-        const double len = ng.norm();
-        return len > 0 && std::isfinite(len) ? Vec3(ng / len) : Vec3(0, 0, 1);
-    }
-    static Vec3 shadingNormal(const std::array<Vec3, 4>& n, double u, double v, const Vec3& ng) {
-        Vec3 s = bilerp(n, u, v);
-        const double len = s.norm();
-        if (!(len > 0) || !std::isfinite(len)) return ng;
-        s /= len;
-        return s.dot(ng) < 0 ? Vec3(-s) : s;
-    }
-    static double patchSize(const Prim& prim) {
-        double size = 0;
-        for (int i = 0; i < 4; ++i)
-            for (int j = i + 1; j < 4; ++j) size = std::max(size, (prim.p[i] - prim.p[j]).norm());
-        return size;
-    }
-
     static void opaque(PathState& state, double t, const Color& radiance) {
         state.radiance += state.transmittance * radiance;
         state.noteOpacity(t, state.transmittance, 0);
@@ -199,48 +150,12 @@ private:
         return shadeSurface(x, n, ng, -d, surface.material, std::min(surface.height, patchSize(prim)), t, counters);
     }
 
-    // Phong (DESIGN.md, "Radiometry"), two-sided: the normals are turned toward the viewer.
-    Color shadeSurface(const Vec3& x, Vec3 n, Vec3 ng, const Vec3& view, const Material& m, double scale, double t,
-                       Counters& counters) const {
-        if (ng.dot(view) < 0) {
-            ng = -ng;
-            n = -n;
-        }
-        if (n.dot(view) < 0) n = ng;  // a shading normal past the silhouette
-        Color out = m.ambient;
-        const Vec3 origin = x + offsetDistance(x, scale) * ng;
-        for (const Light& light : mScene.lights) {
-            Vec3 l;
-            double distance;
-            Color e;
-            if (!lightAt(light, x, l, distance, e)) continue;
-            const double cosTheta = n.dot(l);
-            if (cosTheta <= 0 || ng.dot(l) <= 0) continue;
-            const double shadow = shadowTransmittance(origin, l, distance, mConeSpread * t, -1, Vec3::Zero(), counters);
-            if (shadow <= 0) continue;
-            const Vec3 mirror = 2 * n.dot(l) * n - l;
-            const double cosAlpha = std::max(0.0, mirror.dot(view));
-            const Color f = m.diffuse / std::numbers::pi +
-                            m.specular * ((m.shininess + 2) / (2 * std::numbers::pi) * std::pow(cosAlpha, m.shininess));
-            out += shadow * cosTheta * e.cwiseProduct(f);
-        }
-        return out;
-    }
-
-    // Direction toward the light, distance to it (∞ for directional) and irradiance at x.
-    static bool lightAt(const Light& light, const Vec3& x, Vec3& l, double& distance, Color& e) {
-        if (light.type == LightType::Directional) {
-            l = -light.direction;
-            distance = std::numeric_limits<double>::infinity();
-            e = light.color;
-            return true;
-        }
-        const Vec3 delta = light.position - x;
-        distance = delta.norm();
-        if (!(distance > 0) || !std::isfinite(distance)) return false;
-        l = delta / distance;
-        e = light.color / (distance * distance);
-        return e.allFinite();
+    Color shadeSurface(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& view, const Material& m, double scale,
+                       double t, Counters& counters) const {
+        return detail::shadePhong(mScene.lights, x, n, ng, view, m, Color::Ones(), scale,
+                                  [&](const Vec3& origin, const Vec3& l, double distance) {
+                                      return shadowTransmittance(origin, l, distance, mConeSpread * t, -1, Vec3::Zero(), counters);
+                                  });
     }
 
     // Transmittance from o toward the light along the unit direction l, up to tMax: opaque
@@ -439,17 +354,14 @@ private:
 RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progress& progress) {
     const auto loadStart = std::chrono::steady_clock::now();
     RenderResult result;
-    const int width = options.width > 0 ? options.width : scene.camera.width;
-    const int height = options.height > 0 ? options.height : scene.camera.height;
-    if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
-        throw InputError(scene.file, "image size must be in [1, 16384]");
+    const auto [width, height] = detail::imageSize(scene, options.width, options.height);
     const int strata = std::max(1, int(std::ceil(std::sqrt(double(std::max(options.spp, 1))))));
 
+    const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene);
     // Texels referenced by some surface (the others are not loaded).
     std::vector<TexelRuntime> texels(scene.texels.size());
     for (const SurfaceDef& s : scene.surfaces) {
         if (!s.texel) continue;
-        if (*s.texel >= scene.texels.size()) throw InputError(scene.file, "texel index out of range", "surface.texel");
         TexelRuntime& t = texels[*s.texel];
         if (t.tree) continue;
         const TexelDef& def = scene.texels[*s.texel];
@@ -461,119 +373,44 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
         t.material = def.material;
     }
 
-    // Faces: plain patches, or cells over them.
-    std::vector<SurfaceRuntime> surfaces;
-    std::vector<Prim> prims;
-    std::uint64_t cells = 0;
-    for (std::size_t si = 0; si < scene.surfaces.size(); ++si) {
-        const SurfaceDef& def = scene.surfaces[si];
-        SurfaceRuntime s;
-        s.material = def.material;
-        s.texel = def.texel ? int(*def.texel) : -1;
-        s.repeatU = def.repeat[0];
-        s.repeatV = def.repeat[1];
-        s.height = def.height;
-        surfaces.push_back(s);
-        const auto mesh = def.meshData ? def.meshData : std::make_shared<const ingest::QuadMesh>(ingest::loadBaseMesh(def.mesh));
-        for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
-            Prim prim;
-            prim.surface = int(si);
-            prim.face = int(f);
-            if (!detail::baseFaceCorners(*mesh, f, prim.p, prim.n))
-                throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
-            if (def.texel) {
-                prim.textured = true;
-                prim.cell = TrilinearCell(prim.p, prim.n, def.height, def.placement == Placement::Under);
-                ++cells;
-            }
-            prims.push_back(prim);
-        }
-    }
-    const std::uint64_t faceCount = prims.size();
-    const Tracer tracer(std::move(prims));
-
-    // Camera.
-    const Camera& cam = scene.camera;
-    const Vec3 forward = (cam.lookAt - cam.position).normalized();
-    const Vec3 right = forward.cross(cam.up).normalized();
-    const Vec3 up = right.cross(forward);
-    const double tanHalf = std::tan(cam.fovY * std::numbers::pi / 360);
-    const double aspect = double(width) / double(height);
-    const double coneSpread = detail::coneSpread(cam.fovY, height, strata);
-
-    Integrator integrator(scene, options, tracer, surfaces, texels, coneSpread);
+    const detail::CameraRays camera(scene.camera, width, height);
+    const double coneSpread = detail::coneSpread(scene.camera.fovY, height, strata);
+    const Integrator integrator(scene, options, *geometry.tracer, geometry.surfaces, texels, coneSpread);
     const auto renderStart = std::chrono::steady_clock::now();
-    result.stats.loadSeconds = std::chrono::duration<double>(renderStart - loadStart).count();
+    const double loadSeconds = std::chrono::duration<double>(renderStart - loadStart).count();
 
     Image image(width, height, options.aovs);
-    constexpr int kTile = 16;
-    const int tilesX = (width + kTile - 1) / kTile, tilesY = (height + kTile - 1) / kTile;
-    const int tiles = tilesX * tilesY;
+    const int threads = detail::resolveThreads(options.threads);
     std::vector<Counters> tileCounters;
-    tileCounters.resize(std::size_t(tiles));
-    const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
-    progress.start("render", std::uint64_t(tiles));
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
-            for (int tileIndex = range.begin(); tileIndex != range.end(); ++tileIndex) {
-                if (progress.wasInterrupted()) return;
-                Counters& counters = tileCounters[std::size_t(tileIndex)];
-                const int x0 = (tileIndex % tilesX) * kTile, y0 = (tileIndex / tilesX) * kTile;
-                for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
-                    for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
-                        Color sum = Color::Zero();
-                        double alpha = 0, depth = 0, levelSum = 0, levelWeight = 0;
-                        int depthCount = 0;
-                        for (int sy = 0; sy < strata; ++sy) {
-                            for (int sx = 0; sx < strata; ++sx) {
-                                const double px = (x + (sx + 0.5) / strata) / width;
-                                const double py = (y + (sy + 0.5) / strata) / height;
-                                const Vec3 d = (forward + (2 * px - 1) * tanHalf * aspect * right +
-                                                (1 - 2 * py) * tanHalf * up).normalized();
-                                const PathState s = integrator.radiance(cam.position, d, counters);
-                                sum += s.radiance;
-                                alpha += 1 - s.transmittance;
-                                if (s.depthSet) {
-                                    depth += s.depth;
-                                    ++depthCount;
-                                }
-                                levelSum += s.levelSum;
-                                levelWeight += s.levelWeight;
-                            }
-                        }
-                        const double n = double(strata * strata);
-                        const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
-                        for (int c = 0; c < 3; ++c) image.rgba[4 * i + std::size_t(c)] = float(sum[c] / n);
-                        image.rgba[4 * i + 3] = float(alpha / n);
-                        if (options.aovs) {
-                            image.depth[i] = depthCount ? float(depth / depthCount) : 0.0f;
-                            image.level[i] = levelWeight > 0 ? float(levelSum / levelWeight) : -1.0f;
-                        }
-                    }
+    detail::renderTiles(image, threads, progress, tileCounters, [&](int x, int y, Counters& counters) {
+        detail::PixelValue value;
+        double depth = 0, levelSum = 0, levelWeight = 0;
+        int depthCount = 0;
+        for (int sy = 0; sy < strata; ++sy) {
+            for (int sx = 0; sx < strata; ++sx) {
+                const double px = (x + (sx + 0.5) / strata) / width;
+                const double py = (y + (sy + 0.5) / strata) / height;
+                const PathState s = integrator.radiance(camera.origin(), camera.direction(px, py), counters);
+                value.radiance += s.radiance;
+                value.alpha += 1 - s.transmittance;
+                if (s.depthSet) {
+                    depth += s.depth;
+                    ++depthCount;
                 }
-                progress.advance(1);
+                levelSum += s.levelSum;
+                levelWeight += s.levelWeight;
             }
-        });
+        }
+        const double n = double(strata * strata);
+        value.radiance /= n;
+        value.alpha /= n;
+        value.depth = depthCount ? depth / depthCount : 0.0;
+        value.level = levelWeight > 0 ? levelSum / levelWeight : -1.0;
+        return value;
     });
-    progress.finish();
 
-    Counters total;
-    for (const Counters& c : tileCounters) total.add(c);
-    RenderStats& st = result.stats;
-    st.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - renderStart).count();
-    st.threads = threads;
-    st.width = width;
-    st.height = height;
-    st.spp = strata * strata;
-    st.faces = faceCount;
-    st.cells = cells;
-    st.primaryRays = total.primary;
-    st.shadowRays = total.shadow;
-    st.cellSegments = total.segments;
-    st.voxelsVisited = total.voxels;
-    st.reflectanceEvaluations = total.reflectance;
-    st.levelHistogram = total.histogram;
+    const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - renderStart).count();
+    result.stats = detail::summarize(tileCounters, geometry, threads, width, height, strata * strata, wallSeconds, loadSeconds);
     result.image = std::move(image);
     result.warnings = scene.warnings;
     return result;

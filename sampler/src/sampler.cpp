@@ -48,38 +48,6 @@ std::uint64_t mix64(std::uint64_t x) {
     return x ^ (x >> 31);
 }
 
-const std::array<float, 256>& srgbTable() {
-    static const std::array<float, 256> table = [] {
-        std::array<float, 256> t{};
-        for (int i = 0; i < 256; ++i) {
-            const double c = i / 255.0;
-            t[std::size_t(i)] = float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
-        }
-        return t;
-    }();
-    return table;
-}
-
-// Bilinear lookup of a base-colour texture, glTF's default REPEAT wrapping, decoded to linear
-// before filtering (averaging sRGB values would darken edges).
-Eigen::Vector3f sampleTexture(const ingest::Image& image, float u, float v) {
-    const auto& lut = srgbTable();
-    const float x = u * float(image.width) - 0.5f, y = v * float(image.height) - 0.5f;
-    const float fx = std::floor(x), fy = std::floor(y);
-    const float tx = x - fx, ty = y - fy;
-    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
-    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-    for (int dy = 0; dy < 2; ++dy)
-        for (int dx = 0; dx < 2; ++dx) {
-            if (!std::isfinite(fx) || !std::isfinite(fy)) return Eigen::Vector3f::Ones();
-            const int px = wrap(long(fx) + dx, image.width), py = wrap(long(fy) + dy, image.height);
-            const std::uint8_t* p = &image.rgba[(std::size_t(py) * std::size_t(image.width) + std::size_t(px)) * 4];
-            const float w = (dx ? tx : 1 - tx) * (dy ? ty : 1 - ty);
-            sum += w * Eigen::Vector3f(lut[p[0]], lut[p[1]], lut[p[2]]);
-        }
-    return sum;
-}
-
 // Everything the clip phase needs to know about one triangle.
 struct TriangleColour {
     Eigen::Vector3f factor{1, 1, 1};
@@ -139,10 +107,10 @@ public:
             const double gamma = denom > 0 ? (d00 * d21 - d01 * d20) / denom : 1.0 / 3;
             const Eigen::Vector2f uv =
                 float(1 - beta - gamma) * uv0 + float(beta) * uv1 + float(gamma) * uv2;
-            sum += float(w) * sampleTexture(*c.texture, uv.x(), uv.y());
+            sum += float(w) * ingest::sampleBaseColour(*c.texture, uv.x(), uv.y());
             total += w;
         }
-        if (total <= 0) return c.factor.cwiseProduct(sampleTexture(*c.texture, uv0.x(), uv0.y()));
+        if (total <= 0) return c.factor.cwiseProduct(ingest::sampleBaseColour(*c.texture, uv0.x(), uv0.y()));
         return c.factor.cwiseProduct(sum / float(total));
     }
 

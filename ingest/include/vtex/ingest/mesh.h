@@ -27,6 +27,11 @@ struct Image {
 /// when its size does not match its pixels or libpng fails.
 std::string encodePng(const Image& image);
 
+/// The linear RGB base colour of `image` at texture coordinates (u, v): bilinear, glTF's
+/// default REPEAT wrapping, sRGB decoded before filtering (averaging encoded values would
+/// darken edges). White for an empty image or a non-finite coordinate.
+Eigen::Vector3f sampleBaseColour(const Image& image, float u, float v);
+
 struct Material {
     /// glTF baseColorFactor, linear RGBA.
     Eigen::Vector4f baseColorFactor{1.0f, 1.0f, 1.0f, 1.0f};

@@ -1,0 +1,112 @@
+// See frame.h.
+#include "frame.h"
+
+#include <vtex/core/error.h>
+
+#include "footprint.h"
+
+#include <string>
+
+namespace vtex::render::detail {
+
+SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
+    SceneGeometry geometry;
+    std::vector<Prim> prims;
+    for (std::size_t si = 0; si < scene.surfaces.size(); ++si) {
+        const SurfaceDef& def = scene.surfaces[si];
+        if (def.texel && *def.texel >= scene.texels.size())
+            throw InputError(scene.file, "texel index out of range", "surface.texel");
+        SurfaceRuntime s;
+        s.material = def.material;
+        s.texel = def.texel ? int(*def.texel) : -1;
+        s.repeatU = def.repeat[0];
+        s.repeatV = def.repeat[1];
+        s.height = def.height;
+        geometry.surfaces.push_back(s);
+        const auto mesh = def.meshData ? def.meshData : std::make_shared<const ingest::QuadMesh>(ingest::loadBaseMesh(def.mesh));
+        for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
+            Prim prim;
+            prim.surface = int(si);
+            prim.face = int(f);
+            if (!baseFaceCorners(*mesh, f, prim.p, prim.n))
+                throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
+            if (def.texel) {
+                prim.cell = TrilinearCell(prim.p, prim.n, def.height, def.placement == Placement::Under);
+                ++geometry.cells;
+                if (cellsAsFloors)
+                    prim.p = prim.cell.faceCorners(0);
+                else
+                    prim.textured = true;
+            }
+            prims.push_back(prim);
+        }
+    }
+    geometry.faces = prims.size();
+    geometry.tracer = std::make_unique<Tracer>(std::move(prims));
+    return geometry;
+}
+
+std::pair<int, int> imageSize(const Scene& scene, int width, int height) {
+    const int w = width > 0 ? width : scene.camera.width;
+    const int h = height > 0 ? height : scene.camera.height;
+    if (w <= 0 || h <= 0 || w > 16384 || h > 16384) throw InputError(scene.file, "image size must be in [1, 16384]");
+    return {w, h};
+}
+
+CameraRays::CameraRays(const Camera& camera, int width, int height)
+    : mOrigin(camera.position),
+      mForward((camera.lookAt - camera.position).normalized()),
+      mRight(mForward.cross(camera.up).normalized()),
+      mUp(mRight.cross(mForward)),
+      mTanHalf(std::tan(camera.fovY * std::numbers::pi / 360)),
+      mAspect(double(width) / double(height)) {}
+
+RenderStats summarize(const std::vector<Counters>& tileCounters, const SceneGeometry& geometry, int threads,
+                      int width, int height, int spp, double wallSeconds, double loadSeconds) {
+    Counters total;
+    for (const Counters& c : tileCounters) total.add(c);
+    RenderStats st;
+    st.wallSeconds = wallSeconds;
+    st.loadSeconds = loadSeconds;
+    st.threads = threads;
+    st.width = width;
+    st.height = height;
+    st.spp = spp;
+    st.faces = geometry.faces;
+    st.cells = geometry.cells;
+    st.primaryRays = total.primary;
+    st.shadowRays = total.shadow;
+    st.cellSegments = total.segments;
+    st.voxelsVisited = total.voxels;
+    st.reflectanceEvaluations = total.reflectance;
+    st.levelHistogram = total.histogram;
+    return st;
+}
+
+Vec3 geometricNormal(const std::array<Vec3, 4>& p, double u, double v, const std::array<Vec3, 4>& n) {
+    const Vec3 du = (1 - v) * (p[1] - p[0]) + v * (p[3] - p[2]);
+    const Vec3 dv = (1 - u) * (p[2] - p[0]) + u * (p[3] - p[1]);
+    Vec3 ng = du.cross(dv);
+    // At a triangle's collapsed corner the cross product vanishes: use the other corners'.
+    if (!(ng.squaredNorm() > 0) || !ng.allFinite()) ng = (p[1] - p[0]).cross(p[3] - p[0]);
+    if (!(ng.squaredNorm() > 0) || !ng.allFinite()) ng = bilerp(n, u, v);
+    const double len = ng.norm();
+    return len > 0 && std::isfinite(len) ? Vec3(ng / len) : Vec3(0, 0, 1);
+}
+
+Vec3 shadingNormal(const std::array<Vec3, 4>& n, double u, double v, const Vec3& ng) {
+    Vec3 s = bilerp(n, u, v);
+    const double len = s.norm();
+    if (!(len > 0) || !std::isfinite(len)) return ng;
+    s /= len;
+    return s.dot(ng) < 0 ? Vec3(-s) : s;
+}
+
+double patchSize(const std::array<Vec3, 4>& p) {
+    double size = 0;
+    for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) size = std::max(size, (p[i] - p[j]).norm());
+    return size;
+}
+
+}  // namespace vtex::render::detail

@@ -1,0 +1,200 @@
+// What the texel renderer and the reference renderer share, so that their images differ only
+// by what is inside the cells: the base faces and cells of a scene behind one Embree BVH, the
+// camera's rays, Phong shading of opaque surfaces with the same lights and shadow rule, the
+// tiled parallel loop over pixels and the statistics.
+#pragma once
+
+#include <vtex/core/progress.h>
+#include <vtex/render/image.h>
+#include <vtex/render/renderer.h>
+#include <vtex/render/scene.h>
+
+#include "tracer.h"
+
+#include <Eigen/Geometry>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <vector>
+
+namespace vtex::render::detail {
+
+struct SurfaceRuntime {
+    Material material;
+    int texel = -1;
+    double repeatU = 1, repeatV = 1;
+    double height = 0;
+};
+
+/// The base faces of a scene: plain patches, and cells over the faces of textured surfaces.
+struct SceneGeometry {
+    std::vector<SurfaceRuntime> surfaces;
+    std::unique_ptr<Tracer> tracer;
+    std::uint64_t faces = 0;
+    std::uint64_t cells = 0;
+};
+
+/// Loads the base meshes and builds the BVH. With `cellsAsFloors`, a textured face becomes the
+/// plain patch of its cell's floor (w = 0) instead of a cell: for renderers that put the texel's
+/// content into the BVH themselves. Throws vtex::InputError naming the mesh.
+SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors = false);
+
+/// The image size a render makes (the options', else the camera's). Throws vtex::InputError.
+std::pair<int, int> imageSize(const Scene& scene, int width, int height);
+
+/// Pinhole camera rays through image coordinates (px, py) ∈ [0,1]², (0,0) the top left.
+class CameraRays {
+public:
+    CameraRays(const Camera& camera, int width, int height);
+    const Vec3& origin() const { return mOrigin; }
+    Vec3 direction(double px, double py) const {
+        return (mForward + (2 * px - 1) * mTanHalf * mAspect * mRight + (1 - 2 * py) * mTanHalf * mUp).normalized();
+    }
+
+private:
+    Vec3 mOrigin, mForward, mRight, mUp;
+    double mTanHalf, mAspect;
+};
+
+struct Counters {
+    std::uint64_t primary = 0, shadow = 0, segments = 0, voxels = 0, reflectance = 0;
+    std::vector<double> histogram;
+    void add(const Counters& o) {
+        primary += o.primary;
+        shadow += o.shadow;
+        segments += o.segments;
+        voxels += o.voxels;
+        reflectance += o.reflectance;
+        if (histogram.size() < o.histogram.size()) histogram.resize(o.histogram.size(), 0.0);
+        for (std::size_t i = 0; i < o.histogram.size(); ++i) histogram[i] += o.histogram[i];
+    }
+};
+
+/// The statistics every render reports, from the counters summed over the tiles.
+RenderStats summarize(const std::vector<Counters>& tileCounters, const SceneGeometry& geometry, int threads,
+                      int width, int height, int spp, double wallSeconds, double loadSeconds);
+
+inline Vec3 bilerp(const std::array<Vec3, 4>& p, double u, double v) {
+    const Vec3 a = p[0] + u * (p[1] - p[0]);
+    const Vec3 b = p[2] + u * (p[3] - p[2]);
+    return a + v * (b - a);
+}
+
+/// The unit geometric normal of a bilinear patch at (u, v), finite even at a collapsed corner.
+Vec3 geometricNormal(const std::array<Vec3, 4>& p, double u, double v, const std::array<Vec3, 4>& n);
+/// The interpolated corner normal, turned to the side of `ng`; `ng` where it is undefined.
+Vec3 shadingNormal(const std::array<Vec3, 4>& n, double u, double v, const Vec3& ng);
+/// The largest distance between two corners of a patch.
+double patchSize(const std::array<Vec3, 4>& p);
+
+/// An offset along the normal that lifts a surface point clear of the rounding of its own
+/// intersection (pbrt-v4's OffsetRayOrigin idea, with a bound relative to the coordinates and
+/// to the local feature size rather than a propagated error).
+inline double offsetDistance(const Vec3& x, double scale) { return 1e-9 * x.cwiseAbs().maxCoeff() + 1e-6 * scale; }
+
+/// Direction toward the light, distance to it (∞ for directional) and irradiance at x; false
+/// where it is undefined (x on a point light).
+inline bool lightAt(const Light& light, const Vec3& x, Vec3& l, double& distance, Color& e) {
+    if (light.type == LightType::Directional) {
+        l = -light.direction;
+        distance = std::numeric_limits<double>::infinity();
+        e = light.color;
+        return true;
+    }
+    const Vec3 delta = light.position - x;
+    distance = delta.norm();
+    if (!(distance > 0) || !std::isfinite(distance)) return false;
+    l = delta / distance;
+    e = light.color / (distance * distance);
+    return e.allFinite();
+}
+
+/// Energy-normalised Phong (DESIGN.md, "Radiometry") of an opaque two-sided surface: the
+/// normals are turned toward the viewer. `albedo` scales the diffuse and ambient colours (a
+/// texel's base colour; 1 for base faces). `shadow(origin, l, distance)` is the transmittance
+/// toward a light from the lifted origin; `scale` is the local feature size for that lift.
+template <class Shadow>
+Color shadePhong(const std::vector<Light>& lights, const Vec3& x, Vec3 n, Vec3 ng, const Vec3& view,
+                 const Material& m, const Color& albedo, double scale, Shadow&& shadow) {
+    if (ng.dot(view) < 0) {
+        ng = -ng;
+        n = -n;
+    }
+    if (n.dot(view) < 0) n = ng;  // a shading normal past the silhouette
+    Color out = m.ambient.cwiseProduct(albedo);
+    const Vec3 origin = x + offsetDistance(x, scale) * ng;
+    for (const Light& light : lights) {
+        Vec3 l;
+        double distance;
+        Color e;
+        if (!lightAt(light, x, l, distance, e)) continue;
+        const double cosTheta = n.dot(l);
+        if (cosTheta <= 0 || ng.dot(l) <= 0) continue;
+        const double transmittance = shadow(origin, l, distance);
+        if (transmittance <= 0) continue;
+        const Vec3 mirror = 2 * n.dot(l) * n - l;
+        const double cosAlpha = std::max(0.0, mirror.dot(view));
+        const Color f = m.diffuse.cwiseProduct(albedo) / std::numbers::pi +
+                        m.specular * ((m.shininess + 2) / (2 * std::numbers::pi) * std::pow(cosAlpha, m.shininess));
+        out += transmittance * cosTheta * e.cwiseProduct(f);
+    }
+    return out;
+}
+
+/// What one pixel's samples added up to.
+struct PixelValue {
+    Color radiance = Color::Zero();
+    double alpha = 0;
+    double depth = 0;    ///< AOV; 0 where nothing was hit
+    double level = -1;   ///< AOV; −1 where no texel was seen
+};
+
+/// Renders every pixel with `pixel(x, y, counters)` in 16×16 tiles on `threads` TBB workers
+/// (the pixel value does not depend on which thread computes it), with progress per tile.
+template <class PixelFunction>
+void renderTiles(Image& image, int threads, Progress& progress, std::vector<Counters>& tileCounters,
+                 PixelFunction&& pixel) {
+    constexpr int kTile = 16;
+    const int width = image.width, height = image.height;
+    const int tilesX = (width + kTile - 1) / kTile, tilesY = (height + kTile - 1) / kTile;
+    const int tiles = tilesX * tilesY;
+    tileCounters.assign(std::size_t(tiles), Counters{});
+    progress.start("render", std::uint64_t(tiles));
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+            for (int tileIndex = range.begin(); tileIndex != range.end(); ++tileIndex) {
+                if (progress.wasInterrupted()) return;
+                Counters& counters = tileCounters[std::size_t(tileIndex)];
+                const int x0 = (tileIndex % tilesX) * kTile, y0 = (tileIndex / tilesX) * kTile;
+                for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
+                    for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
+                        const PixelValue value = pixel(x, y, counters);
+                        const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                        for (int c = 0; c < 3; ++c) image.rgba[4 * i + std::size_t(c)] = float(value.radiance[c]);
+                        image.rgba[4 * i + 3] = float(value.alpha);
+                        if (image.hasAovs()) {
+                            image.depth[i] = float(value.depth);
+                            image.level[i] = float(value.level);
+                        }
+                    }
+                }
+                progress.advance(1);
+            }
+        });
+    });
+    progress.finish();
+}
+
+inline int resolveThreads(int requested) {
+    return requested > 0 ? requested : tbb::this_task_arena::max_concurrency();
+}
+
+}  // namespace vtex::render::detail
