@@ -148,6 +148,21 @@ Color shadePhong(const std::vector<Light>& lights, const Vec3& x, Vec3 n, Vec3 n
     return out;
 }
 
+// The cell coordinates where the ray enters at hit.t: the face parameters when it crossed a
+// face there, the caller's hint when it starts inside the hinted cell, otherwise the inverse
+// trilinear map of the world point.
+inline std::optional<Vec3> entryCoords(const Prim& prim, const Hit& hit, const Vec3& o, const Vec3& d, int hintPrim,
+                                       const Vec3& hintR) {
+    const CellSpan& span = hit.span;
+    const double tolerance = 1e-9 * std::max(1.0, std::abs(span.tOut)) + 1e-12 * prim.cell.size();
+    if (span.faceIn >= 0 && hit.t - span.tIn <= tolerance) return span.rIn;
+    if (span.faceIn < 0 && hit.prim == hintPrim) return hintR;
+    const Vec3 guess = span.faceIn >= 0
+                           ? Vec3(span.rIn + (span.rOut - span.rIn) * std::clamp((hit.t - span.tIn) / (span.tOut - span.tIn), 0.0, 1.0))
+                           : Vec3(0.5, 0.5, 0.5);
+    return prim.cell.inverse(o + hit.t * d, guess, 1e-7, 1e-3);
+}
+
 /// What one pixel's samples added up to.
 struct PixelValue {
     Color radiance = Color::Zero();

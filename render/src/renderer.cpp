@@ -45,6 +45,7 @@ using detail::Prim;
 using detail::SurfaceRuntime;
 using detail::Tracer;
 using detail::bilerp;
+using detail::entryCoords;
 using detail::geometricNormal;
 using detail::lightAt;
 using detail::shadingNormal;
@@ -124,21 +125,6 @@ private:
         state.radiance += state.transmittance * radiance;
         state.noteOpacity(t, state.transmittance, 0);
         state.transmittance = 0;
-    }
-
-    // The cell coordinates where the ray enters at hit.t: the face parameters when it crossed a
-    // face there, the caller's hint when it starts inside the hinted cell, otherwise the inverse
-    // trilinear map of the world point.
-    std::optional<Vec3> entryCoords(const Prim& prim, const Hit& hit, const Vec3& o, const Vec3& d, int hintPrim,
-                                    const Vec3& hintR) const {
-        const CellSpan& span = hit.span;
-        const double tolerance = 1e-9 * std::max(1.0, std::abs(span.tOut)) + 1e-12 * prim.cell.size();
-        if (span.faceIn >= 0 && hit.t - span.tIn <= tolerance) return span.rIn;
-        if (span.faceIn < 0 && hit.prim == hintPrim) return hintR;
-        const Vec3 guess = span.faceIn >= 0
-                               ? Vec3(span.rIn + (span.rOut - span.rIn) * std::clamp((hit.t - span.tIn) / (span.tOut - span.tIn), 0.0, 1.0))
-                               : Vec3(0.5, 0.5, 0.5);
-        return prim.cell.inverse(o + hit.t * d, guess, 1e-7, 1e-3);
     }
 
     Color shadeFloor(const Prim& prim, const SurfaceRuntime& surface, const Vec3& r, const Vec3& d, double t,
@@ -418,6 +404,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
 
 void writeStatsJson(const RenderStats& s, const std::filesystem::path& file) {
     nlohmann::json j;
+    j["renderer"] = s.renderer;
     j["wall_seconds"] = s.wallSeconds;
     j["load_seconds"] = s.loadSeconds;
     j["threads"] = s.threads;
@@ -432,6 +419,7 @@ void writeStatsJson(const RenderStats& s, const std::filesystem::path& file) {
     j["reflectance_evaluations"] = s.reflectanceEvaluations;
     j["level_histogram"] = s.levelHistogram;
     j["mean_level"] = s.meanLevel();
+    if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;
     writeFileAtomically(file, j.dump(2) + "\n");
 }
 

@@ -83,3 +83,37 @@ TEST(RenderCli, BadInputExitsThreeNamingFileAndKey) {
     const auto usage = runVtex({"render", (unknown / "scene.toml").string(), "-o", (dir / "img.exr").string(), "--shading", "magic"});
     EXPECT_EQ(usage.exitStatus, 2);
 }
+
+TEST(ReferenceCli, BothModesWriteTheirFilesAndMissingSourcesExitThree) {
+    const fs::path dir = makeSceneDir("reference");
+    // A texel renders without `source =`; the reference renderer needs it.
+    const auto missing = runVtex({"reference", (dir / "scene.toml").string(), "-o", (dir / "truth.exr").string()});
+    EXPECT_EQ(missing.exitStatus, 3);
+    EXPECT_NE(missing.err.find("scene.toml"), std::string::npos) << missing.err;
+    EXPECT_NE(missing.err.find("texel.source"), std::string::npos) << missing.err;
+    EXPECT_FALSE(fs::exists(dir / "truth.exr"));
+
+    std::ofstream(dir / "leaves.obj") << "v 0.1 0.1 0.1\nv 0.9 0.2 0.3\nv 0.5 0.8 0.9\nv 0.2 0.7 0.2\nf 1 2 3\nf 1 3 4\n";
+    std::string scene = vtex::test::readText(dir / "scene.toml");
+    scene.replace(scene.find("volume = \"t.vto\""), 16, "volume = \"t.vto\"\nsource = \"leaves.obj\"");
+    std::ofstream(dir / "scene.toml", std::ios::trunc) << scene;
+    for (const std::string mode : {"embedded", "deformed"}) {
+        const fs::path exr = dir / (mode + ".exr");
+        const auto r = runVtex({"reference", (dir / "scene.toml").string(), "-o", exr.string(), "--png",
+                                (dir / (mode + ".png")).string(), "--stats", (dir / (mode + ".json")).string(),
+                                "--spp", "4", "--mode", mode, "--quiet"});
+        ASSERT_EQ(r.exitStatus, 0) << r.err;
+        const Image image = readExr(exr);
+        EXPECT_EQ(image.width, 40);
+        EXPECT_TRUE(fs::exists(dir / (mode + ".png")));
+        const std::string stats = vtex::test::readText(dir / (mode + ".json"));
+        EXPECT_NE(stats.find("\"reference-" + mode + "\""), std::string::npos) << stats;
+        EXPECT_NE(stats.find("reference_triangles"), std::string::npos) << stats;
+    }
+    // Over the memory limit: refused before anything is built or written.
+    const auto big = runVtex({"reference", (dir / "scene.toml").string(), "-o", (dir / "big.exr").string(), "--mode",
+                              "deformed", "--max-memory", "0.000001"});
+    EXPECT_EQ(big.exitStatus, 3) << big.err;
+    EXPECT_NE(big.err.find("--mode embedded"), std::string::npos) << big.err;
+    EXPECT_FALSE(fs::exists(dir / "big.exr"));
+}

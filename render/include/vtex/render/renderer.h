@@ -45,6 +45,7 @@ struct RenderOptions {
 };
 
 struct RenderStats {
+    std::string renderer = "texel";  ///< "texel", "reference-embedded" or "reference-deformed"
     double wallSeconds = 0;   ///< the whole render, scene loading excluded
     double loadSeconds = 0;   ///< reading meshes and octrees, building the BVH
     int threads = 0;
@@ -59,6 +60,9 @@ struct RenderStats {
     /// Weight of each octree level in the level choices (blend weights summed over the cell
     /// segments of camera rays); index = level.
     std::vector<double> levelHistogram;
+    /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:
+    /// the deformed copies).
+    std::uint64_t referenceTriangles = 0;
     double meanLevel() const;
 };
 

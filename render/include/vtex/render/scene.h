@@ -8,6 +8,7 @@
 #pragma once
 
 #include <vtex/ingest/base_mesh.h>
+#include <vtex/ingest/mesh.h>
 #include <vtex/octree/octree.h>
 
 #include <Eigen/Core>
@@ -63,6 +64,8 @@ struct TexelDef {
     Material material{{0, 0, 0}, {1, 1, 1}, {0, 0, 0}, 20};
     /// The octree, when the caller provides it in memory (tests); otherwise read from `volume`.
     std::shared_ptr<const octree::Octree> octree;
+    /// The source mesh, when the caller provides it in memory (tests); otherwise read from `source`.
+    std::shared_ptr<const ingest::TriangleMesh> sourceData;
 };
 
 enum class Placement { On, Under };

@@ -1,0 +1,284 @@
+// See deformed_mesh.h.
+#include "deformed_mesh.h"
+
+#include <vtex/core/error.h>
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace vtex::render::detail {
+namespace {
+
+// Subdivision stops here whatever the tolerance: 4^8 pieces per source triangle.
+constexpr int kMaxSubdivision = 8;
+
+struct ClipVertex {
+    Vec3 r;         ///< tiled reference coordinates
+    Eigen::Vector2d b;  ///< barycentric (b1, b2) in the source triangle
+};
+
+struct ClipPolygon {
+    int count = 0;
+    std::array<ClipVertex, 16> v;
+};
+
+// Keeps the part of `in` where sign·(r[axis] − c) ≥ 0 (Sutherland–Hodgman, one plane).
+void clipPlane(const ClipPolygon& in, int axis, double c, double sign, ClipPolygon& out) {
+    out.count = 0;
+    for (int i = 0; i < in.count; ++i) {
+        const ClipVertex& a = in.v[std::size_t(i)];
+        const ClipVertex& b = in.v[std::size_t((i + 1) % in.count)];
+        const double da = sign * (a.r[axis] - c), db = sign * (b.r[axis] - c);
+        if (da >= 0 && out.count < 16) out.v[std::size_t(out.count++)] = a;
+        if ((da < 0) != (db < 0) && out.count < 16) {
+            const double s = da / (da - db);
+            ClipVertex x{a.r + s * (b.r - a.r), a.b + s * (b.b - a.b)};
+            x.r[axis] = c;  // exactly on the plane
+            out.v[std::size_t(out.count++)] = x;
+        }
+    }
+}
+
+struct CellOutput {
+    std::vector<Eigen::Vector3f> vertices;  // 3 per triangle
+    std::vector<std::uint32_t> sourceTriangle;
+    std::vector<Eigen::Vector2f> barycentric;  // 3 per triangle
+};
+
+class CellDeformer {
+public:
+    CellDeformer(const TrilinearCell& cell, const SurfaceRuntime& surface, double tolerance, std::uint32_t sourceTriangle,
+                 CellOutput& out)
+        : mCell(cell), mSurface(surface), mTolerance(tolerance * cell.size()), mTriangle(sourceTriangle), mOut(out) {}
+
+    void emitPolygon(const ClipPolygon& p) {
+        for (int i = 1; i + 1 < p.count; ++i) subdivide(p.v[0], p.v[std::size_t(i)], p.v[std::size_t(i + 1)], 0);
+    }
+
+private:
+    Vec3 map(const Vec3& r) const { return mCell.map(Vec3(r.x() / mSurface.repeatU, r.y() / mSurface.repeatV, r.z())); }
+
+    void subdivide(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c, int depth) {
+        const Vec3 xa = map(a.r), xb = map(b.r), xc = map(c.r);
+        if ((xb - xa).cross(xc - xa).squaredNorm() == 0 || (b.r - a.r).cross(c.r - a.r).squaredNorm() == 0) return;
+        const ClipVertex ab{0.5 * (a.r + b.r), 0.5 * (a.b + b.b)};
+        const ClipVertex bc{0.5 * (b.r + c.r), 0.5 * (b.b + c.b)};
+        const ClipVertex ca{0.5 * (c.r + a.r), 0.5 * (c.b + a.b)};
+        // The trilinear map is quadratic along a segment at most (cubic inside): its distance to
+        // the flat triangle is largest near the edge midpoints and the centroid.
+        const double error = std::max({(map(ab.r) - 0.5 * (xa + xb)).norm(), (map(bc.r) - 0.5 * (xb + xc)).norm(),
+                                       (map(ca.r) - 0.5 * (xc + xa)).norm(),
+                                       (map((a.r + b.r + c.r) / 3) - (xa + xb + xc) / 3).norm()});
+        if (error <= mTolerance || depth >= kMaxSubdivision || !std::isfinite(error)) {
+            for (const Vec3* x : {&xa, &xb, &xc}) mOut.vertices.push_back(x->cast<float>());
+            for (const ClipVertex* v : {&a, &b, &c}) mOut.barycentric.push_back(v->b.cast<float>());
+            mOut.sourceTriangle.push_back(mTriangle);
+            return;
+        }
+        subdivide(a, ab, ca, depth + 1);
+        subdivide(ab, b, bc, depth + 1);
+        subdivide(ca, bc, c, depth + 1);
+        subdivide(ab, bc, ca, depth + 1);
+    }
+
+    const TrilinearCell& mCell;
+    const SurfaceRuntime& mSurface;
+    double mTolerance;
+    std::uint32_t mTriangle;
+    CellOutput& mOut;
+};
+
+std::string gib(double bytes) {
+    std::ostringstream s;
+    s.precision(3);
+    s << bytes / double(1ull << 30) << " GiB";
+    return s.str();
+}
+
+}  // namespace
+
+DeformedMesh::DeformedMesh(const std::vector<Prim>& prims, const std::vector<SurfaceRuntime>& surfaces,
+                           const std::vector<const SourceBvh*>& sources, double tolerance, double maxBytes,
+                           const std::filesystem::path& sceneFile)
+    : mSources(sources) {
+    std::vector<std::size_t> cells;
+    double estimate = 0, lengthSum = 0;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        const SurfaceRuntime& s = surfaces[std::size_t(prims[i].surface)];
+        if (s.texel < 0) continue;
+        cells.push_back(i);
+        lengthSum += prims[i].cell.size();
+        const SourceBvh& source = *sources[std::size_t(s.texel)];
+        const double wraps = double(source.shiftMax()[0] - source.shiftMin()[0] + 1) *
+                             double(source.shiftMax()[1] - source.shiftMin()[1] + 1);
+        // Every source triangle lands in every copy at least once; the wrapped copies only add
+        // the pieces that stick out, so they are not counted in full.
+        estimate += std::ceil(s.repeatU) * std::ceil(s.repeatV) * double(source.triangleCount()) * (wraps > 1 ? 1.1 : 1.0);
+    }
+    if (!cells.empty()) mLengthScale = lengthSum / double(cells.size());
+    const auto refuse = [&](double triangles) {
+        throw InputError(sceneFile, "the deformed reference needs about " + std::to_string(std::uint64_t(triangles)) +
+                                        " triangles (" + gib(triangles * kBytesPerTriangle) + "), more than the " +
+                                        gib(maxBytes) + " allowed; use --mode embedded or raise --max-memory");
+    };
+    if (estimate * kBytesPerTriangle > maxBytes) refuse(estimate);
+
+    const double maxTriangles = maxBytes / kBytesPerTriangle;
+    std::vector<CellOutput> outputs(cells.size());
+    std::atomic<std::uint64_t> total{0};
+    std::atomic<bool> over{false};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t c = range.begin(); c != range.end() && !over.load(std::memory_order_relaxed); ++c) {
+            const Prim& prim = prims[cells[c]];
+            const SurfaceRuntime& surface = surfaces[std::size_t(prim.surface)];
+            const SourceBvh& source = *sources[std::size_t(surface.texel)];
+            CellOutput& out = outputs[c];
+            const int tilesU = int(std::ceil(surface.repeatU)), tilesV = int(std::ceil(surface.repeatV));
+            for (std::uint32_t t = 0; t < source.triangleCount(); ++t) {
+                CellDeformer deformer(prim.cell, surface, tolerance, t, out);
+                const auto corners = source.triangle(t);
+                for (int tj = 0; tj < tilesV; ++tj)
+                    for (int ti = 0; ti < tilesU; ++ti)
+                        for (int sy = source.shiftMin()[1]; sy <= source.shiftMax()[1]; ++sy)
+                            for (int sx = source.shiftMin()[0]; sx <= source.shiftMax()[0]; ++sx) {
+                                const Vec3 shift(ti + sx, tj + sy, 0);
+                                const Vec3 lo(ti, tj, 0);
+                                const Vec3 hi(std::min(ti + 1.0, surface.repeatU), std::min(tj + 1.0, surface.repeatV), 1);
+                                ClipPolygon a, b;
+                                a.count = 3;
+                                const Eigen::Vector2d bary[3] = {{0, 0}, {1, 0}, {0, 1}};
+                                bool outside = false;
+                                for (int k = 0; k < 3; ++k) a.v[std::size_t(k)] = {corners[std::size_t(k)] + shift, bary[k]};
+                                for (int axis = 0; axis < 3 && !outside; ++axis) {
+                                    clipPlane(a, axis, lo[axis], 1, b);
+                                    clipPlane(b, axis, hi[axis], -1, a);
+                                    outside = a.count < 3;
+                                }
+                                if (!outside) deformer.emitPolygon(a);
+                            }
+            }
+            if (double(total += out.sourceTriangle.size()) > maxTriangles) over = true;
+        }
+    });
+    if (over) refuse(double(total.load()));
+
+    std::uint64_t count = 0;
+    for (const CellOutput& out : outputs) count += out.sourceTriangle.size();
+    mSourceTriangle.reserve(count);
+    mTexel.reserve(count);
+    mBarycentric.reserve(3 * count);
+
+    RTCDevice device = rtcNewDevice(nullptr);
+    if (!device) throw std::runtime_error("Embree: cannot create a device");
+    mDevice = {device, [](void* p) { rtcReleaseDevice(static_cast<RTCDevice>(p)); }};
+    RTCScene scene = rtcNewScene(device);
+    mScene = {scene, [](void* p) { rtcReleaseScene(static_cast<RTCScene>(p)); }};
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    if (count > 0) {
+        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                     3 * sizeof(float), 3 * count));
+        auto* indices = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                            3 * sizeof(std::uint32_t), count));
+        if (!vertices || !indices) {
+            rtcReleaseGeometry(geometry);
+            throw std::runtime_error("Embree: cannot allocate the deformed meshes");
+        }
+        std::size_t v = 0;
+        for (std::size_t c = 0; c < outputs.size(); ++c) {
+            CellOutput& out = outputs[c];
+            const int texel = surfaces[std::size_t(prims[cells[c]].surface)].texel;
+            for (const Eigen::Vector3f& x : out.vertices) {
+                for (int a = 0; a < 3; ++a) vertices[3 * v + std::size_t(a)] = x[a];
+                indices[v] = std::uint32_t(v);
+                ++v;
+            }
+            mSourceTriangle.insert(mSourceTriangle.end(), out.sourceTriangle.begin(), out.sourceTriangle.end());
+            mTexel.insert(mTexel.end(), out.sourceTriangle.size(), std::uint32_t(texel));
+            mBarycentric.insert(mBarycentric.end(), out.barycentric.begin(), out.barycentric.end());
+            out = CellOutput{};  // release as we go: the peak stays near one copy
+        }
+        rtcCommitGeometry(geometry);
+        rtcAttachGeometry(scene, geometry);
+        rtcReleaseGeometry(geometry);
+    }
+    rtcCommitScene(scene);
+    if (rtcGetDeviceError(device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the deformed meshes' BVH");
+}
+
+DeformedMesh::~DeformedMesh() = default;
+
+double DeformedMesh::selfIntersectionGap(const Vec3& o) const {
+    // Float vertices put a triangle within ~1e-7 of its coordinates of where the double hit
+    // point says it is: a gap ten times that keeps a ray from finding its own triangle again.
+    return 1e-6 * (o.cwiseAbs().maxCoeff() + mLengthScale);
+}
+
+std::optional<DeformedMesh::Hit> DeformedMesh::intersect(const Vec3& o, const Vec3& d, double tNear, double tFar) const {
+    if (mSourceTriangle.empty()) return std::nullopt;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rayhit;
+    rayhit.ray.org_x = float(o.x());
+    rayhit.ray.org_y = float(o.y());
+    rayhit.ray.org_z = float(o.z());
+    rayhit.ray.dir_x = float(d.x());
+    rayhit.ray.dir_y = float(d.y());
+    rayhit.ray.dir_z = float(d.z());
+    rayhit.ray.tnear = float(tNear);
+    rayhit.ray.tfar = std::isfinite(tFar) ? float(tFar) : INFINITY;
+    rayhit.ray.mask = 0xFFFFFFFFu;
+    rayhit.ray.time = 0;
+    rayhit.ray.flags = 0;
+    rayhit.ray.id = 0;
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(static_cast<RTCScene>(mScene.get()), &context, &rayhit);
+    if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+    const std::size_t t = rayhit.hit.primID;
+    Hit hit;
+    hit.t = rayhit.ray.tfar;
+    const Vec3 n(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z);
+    const double length = n.norm();
+    hit.normal = length > 0 && std::isfinite(length) ? Vec3(n / length) : Vec3(-d);
+    const double u = rayhit.hit.u, v = rayhit.hit.v;
+    const Eigen::Vector2d b = (1 - u - v) * mBarycentric[3 * t].cast<double>() + u * mBarycentric[3 * t + 1].cast<double>() +
+                              v * mBarycentric[3 * t + 2].cast<double>();
+    hit.texel = int(mTexel[t]);
+    hit.albedo = mSources[mTexel[t]]->albedo(mSourceTriangle[t], b.x(), b.y());
+    return hit;
+}
+
+bool DeformedMesh::occluded(const Vec3& o, const Vec3& d, double tNear, double tFar) const {
+    if (mSourceTriangle.empty()) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray;
+    ray.org_x = float(o.x());
+    ray.org_y = float(o.y());
+    ray.org_z = float(o.z());
+    ray.dir_x = float(d.x());
+    ray.dir_y = float(d.y());
+    ray.dir_z = float(d.z());
+    ray.tnear = float(std::max(tNear, selfIntersectionGap(o)));
+    ray.tfar = std::isfinite(tFar) ? float(tFar) : INFINITY;
+    ray.mask = 0xFFFFFFFFu;
+    ray.time = 0;
+    ray.flags = 0;
+    ray.id = 0;
+    if (!(ray.tnear < ray.tfar)) return false;
+    rtcOccluded1(static_cast<RTCScene>(mScene.get()), &context, &ray);
+    return ray.tfar < 0;
+}
+
+}  // namespace vtex::render::detail
