@@ -7,9 +7,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <map>
 #include <functional>
 #include <numbers>
 #include <sstream>
+#include <vector>
 
 namespace vtex::pipelines {
 namespace {
@@ -115,6 +118,9 @@ RunReport runDemo(const DemoOptions& options) {
                width, height, "plane-81.obj", 1.0, {1, 1}, grey);
     writeScene(inputs / "fig1-brushed.toml", "Fig. 1, one texel of brushed aluminium", {{0, -2.6, 2.8}, {0, 0, 0.4}, 40},
                height, height, "quad.obj", 1.0, {1, 1}, grey);
+    writeScene(inputs / "study-forest.toml", "the forest of Fig. 9 at half size, for the error-against-time study",
+               {{0, -25, 10}, {0, 0, 0.8}, 40}, std::max(16, width / 2), std::max(12, height / 2), "hill-578.obj", 0.7,
+               {1, 1}, soil);
     writeScene(inputs / "fig4-bush.toml", "Fig. 4, one texel at successive octree levels", {{0, -3.2, 2.6}, {0, 0, 0.8}, 40},
                height, height, "quad.obj", 2.0, {1, 1}, soil);
 
@@ -127,21 +133,51 @@ RunReport runDemo(const DemoOptions& options) {
     for (const char* pattern : {"grass", "bush", "fur", "brushed", "blocks"})
         p << "[[texel]]\nname = \"" << pattern << "\"\nsource = \"" << pattern << "\"\nresolution = "
           << options.maxResolution << "\n\n";
-    auto render = [&](const std::string& name, const std::string& scene, const std::string& texel, double bias = 0) {
+    auto render = [&](const std::string& name, const std::string& scene, const std::string& texel, double bias = 0,
+                      int spp = 1) {
         p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\ntexels = { cover = \"" << texel
-          << "\" }\nlod_bias = " << bias << "\n\n";
+          << "\" }\nlod_bias = " << bias << "\nspp = " << spp << "\n\n";
     };
-    render("fig7-grass-hill", "fig7-grass-hill.toml", "grass");
-    render("fig6-bush-field", "fig6-bush-field.toml", "bush");
-    render("fig10-fur-torus", "fig10-fur-torus.toml", "fur");
-    render("fig9-forest-hill", "fig9-forest-hill.toml", "bush");
-    render("fig11-blocks", "fig11-blocks.toml", "blocks");
-    render("fig1-brushed", "fig1-brushed.toml", "brushed");
-    for (int bias = 0; bias < 4; ++bias)
-        render("fig4-level-minus-" + std::to_string(bias), "fig4-bush.toml", "bush", bias);
-    for (int bias = 1; bias < 4; ++bias)
-        p << "[[compare]]\nname = \"fig4-level-minus-" << bias << "-vs-finest\"\na = \"fig4-level-minus-0\"\nb = "
-          << "\"fig4-level-minus-" << bias << "\"\n\n";
+    auto reference = [&](const std::string& name, const std::string& scene, const std::string& texel, int spp) {
+        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\ntexels = { cover = \"" << texel
+          << "\" }\nrenderer = \"reference\"\nspp = " << spp << "\n\n";
+    };
+    auto compare = [&](const std::string& a, const std::string& b, const std::string& name) {
+        p << "[[compare]]\nname = \"" << name << "\"\na = \"" << a << "\"\nb = \"" << b << "\"\n\n";
+    };
+    // Each figure with its explicit-geometry reference and its measured error.
+    const std::vector<std::array<std::string, 3>> figures = {
+        {"fig7-grass-hill", "fig7-grass-hill.toml", "grass"}, {"fig6-bush-field", "fig6-bush-field.toml", "bush"},
+        {"fig10-fur-torus", "fig10-fur-torus.toml", "fur"},   {"fig9-forest-hill", "fig9-forest-hill.toml", "bush"},
+        {"fig11-blocks", "fig11-blocks.toml", "blocks"},      {"fig1-brushed", "fig1-brushed.toml", "brushed"}};
+    for (const auto& [name, scene, texel] : figures) {
+        render(name, scene, texel);
+        reference(name + "-reference", scene, texel, options.referenceSpp);
+        compare(name, name + "-reference", name + "-vs-reference");
+    }
+    // Fig. 4: the levels side by side, each against the finest and against the reference.
+    reference("fig4-reference", "fig4-bush.toml", "bush", options.referenceSpp);
+    for (int bias = 0; bias < 4; ++bias) {
+        const std::string level = "fig4-level-minus-" + std::to_string(bias);
+        render(level, "fig4-bush.toml", "bush", bias);
+        compare(level, "fig4-reference", level + "-vs-reference");
+        if (bias > 0) compare("fig4-level-minus-0", level, level + "-vs-finest");
+    }
+    // Error against run time on the forest at half the image size: texel renders per LoD bias and
+    // spp, reference renders per spp, all against a reference of many samples.
+    reference("study-truth", "study-forest.toml", "bush", options.studyTruthSpp);
+    for (int spp : {1, 4, 16, 64}) {
+        const std::string name = "study-reference-" + std::to_string(spp) + "spp";
+        reference(name, "study-forest.toml", "bush", spp);
+        compare(name, "study-truth", name + "-vs-truth");
+    }
+    for (int bias : {-1, 0, 1})
+        for (int spp : {1, 4}) {
+            const std::string name = "study-texel-bias" + std::string(bias < 0 ? "-" : bias > 0 ? "+" : "") +
+                                     std::to_string(std::abs(bias)) + "-" + std::to_string(spp) + "spp";
+            render(name, "study-forest.toml", "bush", bias, spp);
+            compare(name, "study-truth", name + "-vs-truth");
+        }
     writeFileAtomically(inputs / "pipeline.toml", p.str());
 
     RunOptions run = options.run;
@@ -151,39 +187,76 @@ RunReport runDemo(const DemoOptions& options) {
 }
 
 std::string formatDemoReport(const RunReport& report) {
+    using Json = nlohmann::json;
     std::ostringstream out;
     char line[320];
     int ran = 0, cached = 0;
+    std::map<std::string, Json> renders, compares;
     for (const auto& s : report.stages) {
         ran += s.status == StageRecord::Status::Ran;
         cached += s.status == StageRecord::Status::Cached;
+        if (s.detailsJson.empty()) continue;
+        if (s.kind == "render") renders[s.name] = Json::parse(s.detailsJson);
+        if (s.kind == "compare") compares[s.name] = Json::parse(s.detailsJson);
     }
     std::snprintf(line, sizeof line, "vtex demo: %zu stages (%d run, %d cached) in %.1f s\n\n", report.stages.size(),
                   ran, cached, report.seconds);
     out << line;
+    auto seconds = [](const Json& stats) { return stats.value("wall_seconds", 0.0) + stats.value("load_seconds", 0.0); };
     for (const auto& s : report.stages) {
-        if (s.detailsJson.empty() || (s.kind != "build" && s.kind != "render" && s.kind != "compare")) continue;
-        const auto d = nlohmann::json::parse(s.detailsJson);
-        if (s.kind == "build")
-            std::snprintf(line, sizeof line, "  texel  %-26s %2zu levels, %9llu nodes stored, compression %.2f%%\n",
-                          s.name.c_str(), d["levels"].size(), (unsigned long long)d["stored_nodes"].get<std::uint64_t>(),
-                          100 * d["compression"].get<double>());
-        else if (s.kind == "render")
-            std::snprintf(line, sizeof line, "  render %-26s %4dx%-4d %6.2f s, mean octree level %.2f -> renders/%s.png\n",
-                          s.name.c_str(), d.value("width", 0), d.value("height", 0), d.value("wall_seconds", 0.0),
-                          d.value("mean_level", -1.0), s.name.c_str());
-        else
-            std::snprintf(line, sizeof line, "  compare %-25s RMSE %.4f, SSIM %.4f\n", s.name.c_str(),
-                          d["rmse"].get<double>(), d["ssim"].get<double>());
+        if (s.kind != "build" || s.detailsJson.empty()) continue;
+        const auto d = Json::parse(s.detailsJson);
+        std::snprintf(line, sizeof line, "  texel  %-22s %2zu levels, %9llu nodes stored, compression %.2f%%\n",
+                      s.name.c_str(), d["levels"].size(), (unsigned long long)d["stored_nodes"].get<std::uint64_t>(),
+                      100 * d["compression"].get<double>());
         out << line;
+    }
+    out << "\n  figure (texel render vs its reference)         texel    reference        RMSE    SSIM\n";
+    for (const auto& [name, metrics] : compares) {
+        const std::string a = metrics.value("a", ""), b = metrics.value("b", "");
+        if (b.find("-reference") == std::string::npos || !renders.count(a) || !renders.count(b)) continue;
+        std::snprintf(line, sizeof line, "  %-44s %6.2f s  %6.2f s %3d spp  %.4f  %.4f  -> renders/%s.png\n", a.c_str(),
+                      seconds(renders[a]), seconds(renders[b]), renders[b].value("spp", 0), metrics.value("rmse", 0.0),
+                      metrics.value("ssim", 0.0), a.c_str());
+        out << line;
+    }
+    for (const auto& [name, metrics] : compares) {
+        if (name.find("-vs-finest") == std::string::npos) continue;
+        std::snprintf(line, sizeof line, "  %-44s RMSE %.4f against the finest level\n", metrics.value("b", "").c_str(),
+                      metrics.value("rmse", 0.0));
+        out << line;
+    }
+    // The study's table, as report.json has it.
+    try {
+        std::ifstream in(report.reportJson);
+        const Json json = Json::parse(in);
+        for (const Json& group : json.at("error_against_time")) {
+            if (group.value("truth", "") != "study-truth") continue;
+            std::snprintf(line, sizeof line, "\n  error against run time (the forest, against a %d-spp reference of %.1f s)\n",
+                          renders.count("study-truth") ? renders["study-truth"].value("spp", 0) : 0,
+                          group.value("truth_seconds", 0.0));
+            out << line << "  render                          seconds     RMSE   speed-up over the reference of equal error\n";
+            for (const Json& row : group.at("rows")) {
+                std::string speedup;
+                if (row.contains("speedup_at_equal_error")) {
+                    const Json& sp = row["speedup_at_equal_error"];
+                    std::snprintf(line, sizeof line, "%s%.2fx", sp["bound"] == "interpolated" ? "" : (sp["bound"].get<std::string>() + " ").c_str(),
+                                  sp["value"].get<double>());
+                    speedup = line;
+                }
+                std::snprintf(line, sizeof line, "  %-30s %8.3f  %7.4f   %s\n", row["render"].get<std::string>().c_str(),
+                              row["seconds"].get<double>(), row["rmse"].get<double>(), speedup.c_str());
+                out << line;
+            }
+        }
+    } catch (const std::exception&) {
+        out << "  (report.json unreadable: no error-against-run-time table)\n";
     }
     for (const auto& o : report.leftOut) out << "  left out: " << o.texel << ": " << o.reason << "\n";
     for (const auto& s : report.stages)
         if (s.status == StageRecord::Status::Failed) out << "  FAILED " << s.kind << " " << s.name << ": " << s.message << "\n";
     out << "\nReport: " << report.reportHtml.string() << " (and report.json); inputs to edit and re-run with "
-        << "`vtex run`: " << (report.output / "inputs" / "pipeline.toml").string() << "\n"
-        << "Not yet part of the demo: explicit-geometry reference renders and the error-against-run-time table "
-           "(`vtex reference` is not built yet).\n";
+        << "`vtex run`: " << (report.output / "inputs" / "pipeline.toml").string() << "\n";
     return out.str();
 }
 

@@ -112,7 +112,7 @@ Pipeline loadPipeline(const fs::path& file) {
     for (std::size_t i = 0; i < renders.size(); ++i) {
         const toml::table& t = *renders[i];
         const std::string path = indexed("render", i);
-        reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading"});
+        reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading", "renderer", "mode"});
         RenderStep s;
         s.name = reader.string(t, path, "name", {});
         checkName(reader, TomlReader::join(path, "name"), s.name, renderNames);
@@ -141,6 +141,20 @@ Pipeline loadPipeline(const fs::path& file) {
         s.spp = int(reader.integer(t, path, "spp", 1, 1, 65536));
         s.lodBias = reader.number(t, path, "lod_bias", 0.0, -16.0, 16.0);
         s.shading = reader.choice(t, path, "shading", std::string("fast"), {"fast", "reference"});
+        s.renderer = reader.choice(t, path, "renderer", std::string("texel"), {"texel", "reference"});
+        s.mode = reader.choice(t, path, "mode", std::string("embedded"), {"embedded", "deformed"});
+        if (s.renderer == "reference") {
+            // The reference draws each texel's source mesh: a bound texel brings the pipeline's
+            // source, an unbound one needs `source =` in the scene.
+            for (const render::SurfaceDef& surface : scene.surfaces) {
+                if (!surface.texel) continue;
+                const render::TexelDef& texel = scene.texels[*surface.texel];
+                if (!s.texels.count(texel.name) && texel.source.empty())
+                    reader.fail(TomlReader::join(path, "renderer"),
+                                "texel '" + texel.name + "' of " + s.scene.filename().string() +
+                                    " is neither bound to a [[texel]] nor given a source mesh in the scene");
+            }
+        }
         pipeline.renders.push_back(s);
     }
 

@@ -10,6 +10,7 @@
 #include <vtex/octree/volume.h>
 #include <vtex/render/compare.h>
 #include <vtex/render/level_bound.h>
+#include <vtex/render/reference.h>
 #include <vtex/render/renderer.h>
 #include <vtex/render/scene.h>
 #include <vtex/sampler/patterns.h>
@@ -95,6 +96,15 @@ render::RenderOptions renderOptions(const RenderStep& step) {
     return o;
 }
 
+render::ReferenceOptions referenceOptions(const RenderStep& step) {
+    render::ReferenceOptions o;
+    o.width = step.width;
+    o.height = step.height;
+    o.spp = step.spp;
+    o.mode = step.mode == "deformed" ? render::ReferenceMode::Deformed : render::ReferenceMode::Embedded;
+    return o;
+}
+
 std::string readText(const fs::path& file) {
     std::ifstream in(file, std::ios::binary);
     std::ostringstream s;
@@ -154,7 +164,8 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             for (const auto& [sceneTexel, texel] : step.texels) {
                 const auto& n = needs[sceneTexelIndex(scene, sceneTexel)];
                 if (!n.used) continue;
-                const int level = n.unbounded ? 63 : n.finestLevel;
+                // A reference render reads only where the sampler placed the source (any level).
+                const int level = step.renderer == "reference" ? 0 : n.unbounded ? 63 : n.finestLevel;
                 if (!need.count(texel) || level > need[texel].first) need[texel] = {level, step.name};
             }
         }
@@ -321,20 +332,27 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         };
         r.describe = [&stages, step, self, boundScene, header] {
             std::ostringstream d;
-            d << header << "render\nsize " << step.width << "x" << step.height << " spp " << step.spp << " lod_bias "
-              << step.lodBias << " shading " << step.shading << "\nscene " << hashFile(step.scene) << "\n";
+            d << header << "render " << step.renderer << " " << step.mode << "\nsize " << step.width << "x" << step.height
+              << " spp " << step.spp << " lod_bias " << step.lodBias << " shading " << step.shading << "\nscene "
+              << hashFile(step.scene) << "\n";
             const render::Scene scene = boundScene();
             for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";
             for (const auto& surface : scene.surfaces)
                 if (surface.texel)
                     d << "texel " << *surface.texel << " " << hashFile(scene.texels[*surface.texel].volume) << "\n";
+            if (step.renderer == "reference")
+                for (const auto& surface : scene.surfaces)
+                    if (surface.texel && !scene.texels[*surface.texel].source.empty())
+                        d << "source " << *surface.texel << " " << hashFile(scene.texels[*surface.texel].source) << "\n";
             for (std::size_t input : stages[self].inputs)
                 for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
             return d.str();
         };
         r.run = [step, boundScene](Stage& self) {
             NullProgress quiet;
-            const render::RenderResult result = render::renderScene(boundScene(), renderOptions(step), quiet);
+            const render::RenderResult result = step.renderer == "reference"
+                                                    ? render::renderReference(boundScene(), referenceOptions(step), quiet)
+                                                    : render::renderScene(boundScene(), renderOptions(step), quiet);
             render::writeExr(result.image, self.outputs.at("image"));
             render::writePng(result.image, self.outputs.at("preview"));
             render::writeStatsJson(result.stats, self.outputs.at("stats"));

@@ -1,5 +1,6 @@
-// `vtex demo` end to end at a small size: every figure is rendered, the Fig. 4 series is
-// compared, the report lists it all, and a second run (or `vtex run` on the demo's own inputs)
+// `vtex demo` end to end at a small size: every figure is rendered and measured against its
+// reference, the Fig. 4 series is compared, the error-against-time study is tabled, the report
+// lists it all, and a second run (or `vtex run` on the demo's own inputs)
 // is entirely cached.
 #include "run_vtex.h"
 
@@ -44,8 +45,20 @@ TEST(Demo, RendersEveryFigureReportsThemAndIsCachedTheSecondTime) {
             EXPECT_GT(stage["details"]["rmse"].get<double>(), 0) << "a coarser level is a different image";
         }
     }
-    EXPECT_EQ(renders, 10) << "Figs. 7, 6, 10, 9, 11, 1 and four levels of Fig. 4";
-    EXPECT_EQ(compares, 3);
+    EXPECT_EQ(renders, 28) << "Figs. 7, 6, 10, 9, 11, 1 and four levels of Fig. 4 (10), their 7 references, "
+                              "and the study's 6 texel renders, 4 references and its truth";
+    EXPECT_EQ(compares, 23) << "10 texel renders against their references, 3 levels against the finest, 10 in the study";
+    // The study's table: every texel render has a speed-up at equal error (or a bound).
+    bool studyFound = false;
+    for (const auto& group : report["error_against_time"]) {
+        if (group["truth"] != "study-truth") continue;
+        studyFound = true;
+        EXPECT_EQ(group["rows"].size(), 10u);
+        for (const auto& row : group["rows"])
+            if (row["renderer"] == "texel") EXPECT_TRUE(row.contains("speedup_at_equal_error")) << row.dump();
+    }
+    EXPECT_TRUE(studyFound);
+    EXPECT_NE(r.out.find("error against run time"), std::string::npos) << r.out;
 
     const auto again = runVtex({"demo", "-o", dir.string(), "--resolution", "16", "--scale", "0.1"});
     ASSERT_EQ(again.exitStatus, 0) << again.err;

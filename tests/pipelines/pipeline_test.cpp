@@ -320,6 +320,49 @@ TEST(Pipeline, TexelsAreSampledOnlyAsFinelyAsARenderCanUseAndUnusedOnesAreNotBui
     EXPECT_EQ(vtex::octree::readVtl(dir / "out/samples/grass.vtl").info.resolution(), 16u);
 }
 
+TEST(Pipeline, ReferenceRendersPutTexelRendersOnAnErrorAgainstTimeTable) {
+    const fs::path dir = makeProject("error_table");
+    std::string pipeline = vtex::test::readText(dir / "pipeline.toml");
+    for (const auto& [name, spp] : {std::pair{"truth", 64}, {"reference-1", 1}, {"reference-4", 4}})
+        pipeline += std::string("\n[[render]]\nname = \"") + name + "\"\nscene = \"hill.toml\"\ntexels = { cover = "
+                    "\"cross\" }\nrenderer = \"reference\"\nspp = " + std::to_string(spp) + "\n";
+    for (const char* a : {"cross-hill", "reference-1", "reference-4"})
+        pipeline += std::string("\n[[compare]]\nname = \"") + a + "-vs-truth\"\na = \"" + a + "\"\nb = \"truth\"\n";
+    writeText(dir / "pipeline.toml", pipeline);
+    const RunReport report = run(dir);
+    ASSERT_TRUE(report.succeeded());
+
+    const auto json = nlohmann::json::parse(vtex::test::readText(dir / "out/report.json"));
+    const auto& groups = json["error_against_time"];
+    ASSERT_EQ(groups.size(), 2u);  // against "truth", and the original grass-vs-cross
+    const auto& group = groups[0]["truth"] == "truth" ? groups[0] : groups[1];
+    std::map<std::string, nlohmann::json> rows;
+    for (const auto& row : group["rows"]) rows[row["render"].get<std::string>()] = row;
+    ASSERT_EQ(rows.size(), 3u);
+    EXPECT_EQ(rows["reference-1"]["renderer"], "reference");
+    EXPECT_EQ(rows["cross-hill"]["filter"], "neyret");
+    // More samples, less error against the 64-sample truth; more time.
+    EXPECT_LT(rows["reference-4"]["rmse"].get<double>(), rows["reference-1"]["rmse"].get<double>());
+    EXPECT_GT(rows["reference-1"]["rmse"].get<double>(), 0);
+    const auto& speedup = rows["cross-hill"]["speedup_at_equal_error"];
+    ASSERT_TRUE(speedup.is_object()) << rows["cross-hill"].dump();
+    EXPECT_GT(speedup["value"].get<double>(), 0);
+    const double texelSeconds = rows["cross-hill"]["seconds"].get<double>();
+    const double texelError = rows["cross-hill"]["rmse"].get<double>();
+    // The bound follows from where the texel render's error falls among the references'.
+    const double e1 = rows["reference-1"]["rmse"].get<double>(), e4 = rows["reference-4"]["rmse"].get<double>();
+    const std::string expectedBound = texelError >= e1 ? "at most" : texelError <= e4 ? "at least" : "interpolated";
+    EXPECT_EQ(speedup["bound"], expectedBound);
+    if (expectedBound == "at most")
+        EXPECT_NEAR(speedup["value"].get<double>() * texelSeconds, rows["reference-1"]["seconds"].get<double>(), 1e-9);
+    const std::string html = vtex::test::readText(dir / "out/report.html");
+    EXPECT_NE(html.find("Error against run time"), std::string::npos);
+    EXPECT_NE(html.find("<svg"), std::string::npos);
+    const auto statsTruth = nlohmann::json::parse(vtex::test::readText(dir / "out/renders/truth.stats.json"));
+    EXPECT_EQ(statsTruth["renderer"], "reference-embedded");
+    EXPECT_EQ(statsTruth["spp"], 64);
+}
+
 TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {
     const fs::path dir = makeProject("refused");
     const std::string good = vtex::test::readText(dir / "pipeline.toml");
@@ -332,10 +375,11 @@ TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {
         {"pattern = \"grass\"", "pattern = \"grass\"\nfile = \"cross.obj\""},
         {"texels = { cover = \"grass\" }", "texels = { moss = \"grass\" }"},  // not in the scene
         {"[pipeline]", "[pipeline"},                          // TOML syntax
+        {"texels = { cover = \"grass\" }", "renderer = \"reference\""},  // nothing to draw in the cells
     };
     const std::vector<std::string> keys = {"texel[0].resolution", "texel[1].source", "source[1].file",
                                            "compare[0].b", "render[0].texels.cover", "source[0]",
-                                           "render[0].texels.moss", "line 2"};
+                                           "render[0].texels.moss", "line 2", "render[0].renderer"};
     for (std::size_t i = 0; i < cases.size(); ++i) {
         std::string bad = good;
         bad.replace(bad.find(cases[i].first), cases[i].first.size(), cases[i].second);

@@ -11,6 +11,9 @@
 /// tiling a 50×500 region to the horizon; Fig. 10 fur on a torus of 240 faces; Fig. 9 a forest
 /// on a hill of 578 faces; Fig. 11 building elements on 81 faces; Fig. 1 one texel of brushed
 /// aluminium; Fig. 4 one texel at four successive octree levels, each compared with the finest.
+/// Every figure is paired with its explicit-geometry reference (`vtex reference`) and its
+/// measured error, and an error-against-run-time study on the forest puts texel renders (LoD
+/// bias −1/0/+1, 1 and 4 spp) and reference renders (1 to 64 spp) against a 256-spp reference.
 #pragma once
 
 #include <vtex/pipelines/pipeline.h>
@@ -26,6 +29,8 @@ struct DemoOptions {
     std::uint32_t maxResolution = 128;  ///< cap on each texel's finest voxels per side (a power of two)
     double imageScale = 0.5;            ///< image size relative to video resolution (768×576)
     std::uint64_t seed = 1;             ///< of the procedural patterns
+    int referenceSpp = 16;              ///< samples per pixel of each figure's reference render
+    int studyTruthSpp = 256;            ///< of the reference the error-against-time study measures against
     bool force = false;                 ///< redo every stage
     RunOptions run;                     ///< log, jobs (the output and force fields are set from the above)
 };

@@ -62,8 +62,14 @@ struct RenderStep {
     int spp = 1;
     double lodBias = 0;
     std::string shading = "fast";       ///< fast | reference
+    /// texel (`vtex render`) | reference (`vtex reference`: the texels' source meshes instead of
+    /// their volumes; lod_bias and shading do not apply)
+    std::string renderer = "texel";
+    std::string mode = "embedded";      ///< reference renders: embedded | deformed
 };
 
+/// `b` is the truth `a` is measured against: the report's error-against-run-time table groups
+/// the comparisons by `b`.
 struct CompareStep {
     std::string name;
     std::string a, b;                   ///< RenderStep names
