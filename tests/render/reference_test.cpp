@@ -189,8 +189,8 @@ TEST(Reference, TexelRenderOfOpaqueCubesMatchesTheReference) {
     // RMSE 0.2 and the mean within [0.5, 1.1] of the reference's. The shading is the texel
     // model's weak point on hard faces: a face voxel holds the face at its border but is shaded
     // and shadowed from its middle, its shadow ray counts the voxel's own extinction again
-    // (docs/reference.md, "What the comparisons found"), and the voxels on the cube's edges carry one disc fitted
-    // to two faces.
+    // (docs/reference.md, "What the comparisons found"), and the voxels on the cube's edges
+    // carry one disc fitted to two faces.
     EXPECT_LT(coverageDifference / double(texelImage.pixels()), 0.005);
     EXPECT_LT(c.rmse, 0.2) << "worst (" << c.worstX << ", " << c.worstY << ") " << c.worstError;
     EXPECT_GT(meanTexel / meanReference, 0.5);
