@@ -1,6 +1,8 @@
 // See deformed_mesh.h.
 #include "deformed_mesh.h"
 
+#include "embree_ray.h"
+
 #include <vtex/core/error.h>
 
 #include <embree3/rtcore.h>
@@ -227,22 +229,7 @@ std::optional<DeformedMesh::Hit> DeformedMesh::intersect(const Vec3& o, const Ve
     if (mSourceTriangle.empty()) return std::nullopt;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRayHit rayhit;
-    rayhit.ray.org_x = float(o.x());
-    rayhit.ray.org_y = float(o.y());
-    rayhit.ray.org_z = float(o.z());
-    rayhit.ray.dir_x = float(d.x());
-    rayhit.ray.dir_y = float(d.y());
-    rayhit.ray.dir_z = float(d.z());
-    rayhit.ray.tnear = float(tNear);
-    rayhit.ray.tfar = std::isfinite(tFar) ? float(tFar) : INFINITY;
-    rayhit.ray.mask = 0xFFFFFFFFu;
-    rayhit.ray.time = 0;
-    rayhit.ray.flags = 0;
-    rayhit.ray.id = 0;
-    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rayhit = embreeRayHit(o, d, tNear, tFar);
     rtcIntersect1(static_cast<RTCScene>(mScene.get()), &context, &rayhit);
     if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     const std::size_t t = rayhit.hit.primID;
@@ -263,19 +250,7 @@ bool DeformedMesh::occluded(const Vec3& o, const Vec3& d, double tNear, double t
     if (mSourceTriangle.empty()) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRay ray;
-    ray.org_x = float(o.x());
-    ray.org_y = float(o.y());
-    ray.org_z = float(o.z());
-    ray.dir_x = float(d.x());
-    ray.dir_y = float(d.y());
-    ray.dir_z = float(d.z());
-    ray.tnear = float(std::max(tNear, selfIntersectionGap(o)));
-    ray.tfar = std::isfinite(tFar) ? float(tFar) : INFINITY;
-    ray.mask = 0xFFFFFFFFu;
-    ray.time = 0;
-    ray.flags = 0;
-    ray.id = 0;
+    RTCRay ray = embreeRay(o, d, std::max(tNear, selfIntersectionGap(o)), tFar);
     if (!(ray.tnear < ray.tfar)) return false;
     rtcOccluded1(static_cast<RTCScene>(mScene.get()), &context, &ray);
     return ray.tfar < 0;

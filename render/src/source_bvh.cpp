@@ -1,6 +1,8 @@
 // See source_bvh.h.
 #include "source_bvh.h"
 
+#include "embree_ray.h"
+
 #include <embree3/rtcore.h>
 
 #include <Eigen/Geometry>
@@ -16,23 +18,6 @@ namespace {
 // How far a mesh may stick out of the unit square and still be wrapped: the sampler wraps any
 // amount, but a part several units out is a mistake in the source, not a texel.
 constexpr int kMaxShift = 4;
-
-RTCRay makeRay(const Vec3& origin, const Vec3& direction, double tNear, double tFar) {
-    RTCRay ray;
-    ray.org_x = float(origin.x());
-    ray.org_y = float(origin.y());
-    ray.org_z = float(origin.z());
-    ray.dir_x = float(direction.x());
-    ray.dir_y = float(direction.y());
-    ray.dir_z = float(direction.z());
-    ray.tnear = float(tNear);
-    ray.tfar = float(tFar);
-    ray.mask = 0xFFFFFFFFu;
-    ray.time = 0;
-    ray.flags = 0;
-    ray.id = 0;
-    return ray;
-}
 
 }  // namespace
 
@@ -153,11 +138,7 @@ std::optional<SourceHit> SourceBvh::intersect(const Vec3& p0, const Vec3& p1, do
     forEachPiece(p0, p1, sMin, [&](const Vec3& origin, double s0, double s1) {
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
-        RTCRayHit rayhit;
-        rayhit.ray = makeRay(origin, delta, s0, s1);
-        rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
-        rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        RTCRayHit rayhit = embreeRayHit(origin, delta, s0, s1);
         rtcIntersect1(static_cast<RTCScene>(mTopScene), &context, &rayhit);
         if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
         const std::uint32_t t = rayhit.hit.primID;
@@ -180,7 +161,7 @@ bool SourceBvh::occluded(const Vec3& p0, const Vec3& p1, double sMin) const {
     return forEachPiece(p0, p1, sMin, [&](const Vec3& origin, double s0, double s1) {
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
-        RTCRay ray = makeRay(origin, delta, s0, s1);
+        RTCRay ray = embreeRay(origin, delta, s0, s1);
         rtcOccluded1(static_cast<RTCScene>(mTopScene), &context, &ray);
         return ray.tfar < 0;  // Embree marks an occluded ray with tfar = −∞
     });

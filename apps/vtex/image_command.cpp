@@ -1,0 +1,31 @@
+#include "image_command.h"
+
+#include <vtex/render/image.h>
+
+namespace vtex::cli {
+
+void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::string& aovHelp) {
+    app.add_option("SCENE", args.scene, "The scene file (scene.toml)")->required();
+    app.add_option("-o,--output", args.output, "The linear OpenEXR image to write")->required();
+    app.add_option("--png", args.png, "Also write an sRGB PNG preview");
+    app.add_option("--width", args.width, "Image width (default: the scene's camera.width)")->check(CLI::Range(1, 16384));
+    app.add_option("--height", args.height, "Image height (default: the scene's camera.height)")->check(CLI::Range(1, 16384));
+    app.add_option("--stats", args.stats, "Write statistics (times, rays, …) as JSON");
+    app.add_option("--threads", args.threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
+    app.add_flag("--aov", args.aovs, aovHelp);
+    app.footer("Exit status: 0 success, 2 bad usage, 3 bad input (file and key named), 1 other failure.");
+}
+
+render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global) {
+    render::Scene scene = render::loadScene(args.scene);
+    for (const auto& w : scene.warnings) warning(global, w);
+    return scene;
+}
+
+void writeImageOutputs(const render::RenderResult& result, const ImageCommandArgs& args) {
+    render::writeExr(result.image, args.output);
+    if (!args.png.empty()) render::writePng(result.image, args.png);
+    if (!args.stats.empty()) render::writeStatsJson(result.stats, args.stats);
+}
+
+}  // namespace vtex::cli

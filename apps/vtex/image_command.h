@@ -1,0 +1,32 @@
+// What `vtex render` and `vtex reference` share: a scene in, an EXR (with a PNG preview and
+// stats.json on request) out, and the options that size and parallelise the image.
+#pragma once
+
+#include "cli.h"
+
+#include <vtex/render/renderer.h>
+#include <vtex/render/scene.h>
+
+#include <string>
+
+namespace vtex::cli {
+
+struct ImageCommandArgs {
+    std::string scene;
+    std::string output;
+    std::string png;
+    std::string stats;
+    int width = 0;
+    int height = 0;
+    int threads = 0;
+    bool aovs = false;
+};
+
+/// SCENE, -o/--output, --png, --width, --height, --stats, --threads, --aov.
+void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::string& aovHelp);
+/// The scene, its warnings printed.
+render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global);
+/// The EXR, then the PNG and stats.json when asked for.
+void writeImageOutputs(const render::RenderResult& result, const ImageCommandArgs& args);
+
+}  // namespace vtex::cli

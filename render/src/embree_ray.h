@@ -1,0 +1,39 @@
+// An Embree 3 ray from a double-precision one: what every rtcIntersect1 / rtcOccluded1 call of
+// the reference renderer starts from.
+#pragma once
+
+#include <vtex/render/geometry.h>
+
+#include <embree3/rtcore.h>
+
+#include <cmath>
+
+namespace vtex::render::detail {
+
+inline RTCRay embreeRay(const Vec3& origin, const Vec3& direction, double tNear, double tFar) {
+    RTCRay ray;
+    ray.org_x = float(origin.x());
+    ray.org_y = float(origin.y());
+    ray.org_z = float(origin.z());
+    ray.dir_x = float(direction.x());
+    ray.dir_y = float(direction.y());
+    ray.dir_z = float(direction.z());
+    ray.tnear = float(tNear);
+    ray.tfar = std::isfinite(tFar) ? float(tFar) : INFINITY;
+    ray.mask = 0xFFFFFFFFu;
+    ray.time = 0;
+    ray.flags = 0;
+    ray.id = 0;
+    return ray;
+}
+
+inline RTCRayHit embreeRayHit(const Vec3& origin, const Vec3& direction, double tNear, double tFar) {
+    RTCRayHit rayhit;
+    rayhit.ray = embreeRay(origin, direction, tNear, tFar);
+    rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return rayhit;
+}
+
+}  // namespace vtex::render::detail
