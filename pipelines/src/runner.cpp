@@ -17,6 +17,7 @@
 #include <vtex/sampler/sampler.h>
 
 #include "content_hash.h"
+#include "memory_monitor.h"
 #include "report.h"
 
 #include <nlohmann/json.hpp>
@@ -388,6 +389,7 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         };
     }
 
+    MemoryMonitor memory;
     // Run wave by wave; a wave is a run of stages of one kind.
     tbb::task_arena arena(options.jobs > 0 ? options.jobs : tbb::task_arena::automatic);
     std::mutex logMutex;
@@ -425,7 +427,15 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                         log("run     " + stage.kind + " " + stage.name);
                     }
                     const auto t = std::chrono::steady_clock::now();
-                    const Json details = stage.run(stage);
+                    const std::uint64_t watch = memory.start();
+                    Json details;
+                    try {
+                        details = stage.run(stage);
+                    } catch (...) {
+                        memory.stop(watch);
+                        throw;
+                    }
+                    stage.record.peakMemoryBytes = memory.stop(watch);
                     stage.record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
                     for (const auto& [role, path] : stage.outputs) stage.outputHashes[role] = hashFile(path);
                     writeManifest(stage, root, details);

@@ -147,6 +147,11 @@ TEST(Pipeline, RunsEndToEndThenEverythingIsCached) {
         EXPECT_TRUE(fs::is_regular_file(dir / file)) << file;
     const auto report = nlohmann::json::parse(vtex::test::readText(dir / "out/report.json"));
     EXPECT_TRUE(report["succeeded"].get<bool>());
+    for (const auto& stage : report["stages"]) {
+        // Resident memory of the process while the stage ran: at least its code and heap.
+        EXPECT_GT(stage["peak_memory_bytes"].get<std::uint64_t>(), 1u << 20) << stage["name"];
+        EXPECT_LE(stage["peak_memory_bytes"].get<std::uint64_t>(), report["peak_memory_bytes"].get<std::uint64_t>());
+    }
     const auto metrics = nlohmann::json::parse(vtex::test::readText(dir / "out/compares/grass-vs-cross.json"));
     EXPECT_GT(metrics["rmse"].get<double>(), 0) << "two different texels render differently";
 
@@ -353,8 +358,9 @@ TEST(Pipeline, ReferenceRendersPutTexelRendersOnAnErrorAgainstTimeTable) {
     const double e1 = rows["reference-1"]["rmse"].get<double>(), e4 = rows["reference-4"]["rmse"].get<double>();
     const std::string expectedBound = texelError >= e1 ? "at most" : texelError <= e4 ? "at least" : "interpolated";
     EXPECT_EQ(speedup["bound"], expectedBound);
-    if (expectedBound == "at most")
+    if (expectedBound == "at most") {
         EXPECT_NEAR(speedup["value"].get<double>() * texelSeconds, rows["reference-1"]["seconds"].get<double>(), 1e-9);
+    }
     const std::string html = vtex::test::readText(dir / "out/report.html");
     EXPECT_NE(html.find("Error against run time"), std::string::npos);
     EXPECT_NE(html.find("<svg"), std::string::npos);

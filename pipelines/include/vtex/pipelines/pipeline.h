@@ -112,6 +112,9 @@ struct StageRecord {
     enum class Status { Ran, Cached, Failed, Skipped } status = Status::Skipped;
     std::string message;                ///< why it failed or was skipped
     double seconds = 0;                 ///< work time (0 when cached)
+    /// The process's peak resident memory while the stage ran (0 when cached). Stages of a wave
+    /// run side by side, so this is the stage's own peak plus what ran beside it.
+    std::uint64_t peakMemoryBytes = 0;
     std::vector<std::filesystem::path> outputs;
     std::string detailsJson;            ///< stage figures (sizes, compression, render stats…)
 };
