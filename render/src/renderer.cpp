@@ -13,6 +13,7 @@
 #include <vtex/render/texel_march.h>
 
 #include "footprint.h"
+#include "light_cache.h"
 #include "march.h"
 #include "tracer.h"
 
@@ -248,6 +249,94 @@ private:
     // (world units, held constant along the shadow ray).
     double shadowTransmittance(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim,
                                const Vec3& hintR, Counters& counters) const {
+        // A directional light and a point inside a texel cell: the cell's transmittance lattice.
+        if (mOptions.shadowCacheResolution > 0 && std::isinf(tMax)) {
+            const int slot = mLightCache.slot(l);
+            if (slot >= 0) {
+                if (hintPrim >= 0 && mLightCache.grid(hintPrim).nw > 0) {
+                    ++counters.shadow;
+                    return nearAndCachedShadow(slot, hintPrim, hintR, l, width, counters);
+                }
+            }
+        }
+        return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters);
+    }
+
+    // A query at cell coordinates r: the exact transmittance over the first lattice step toward
+    // the light (marched in the cell's texel at the query's own level: the voxels next to the
+    // point, which a lit voxel's own column or leaf makes darker than the lattice nodes around
+    // it), times the lattice's value where that step ends.
+    double nearAndCachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, double width,
+                               Counters& counters) const {
+        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
+        const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
+        Mat3 jt = prim.cell.jacobian(r);
+        jt.col(0) /= surface.repeatU;
+        jt.col(1) /= surface.repeatV;
+        Vec3 lr = jt.inverse() * l;
+        const double len = lr.norm();
+        if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
+        lr /= len;
+        const Vec3 p0 = tile(r, surface);
+        double step = 1.0 / double(mLightCache.grid(primIndex).nw);
+        bool floor = false;
+        if (p0.z() + step * lr.z() > 1) step = std::max(0.0, (1 - p0.z()) / lr.z());
+        if (p0.z() + step * lr.z() < 0) {
+            step = std::max(0.0, -p0.z() / lr.z());
+            floor = true;  // the step reaches the base surface, which blocks
+        }
+        const Vec3 p1 = p0 + step * lr;
+        const double scale = localScale(prim.cell, r, surface);
+        const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
+        const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
+        const SegmentTransmittance near = marchTransmittance(*texel.tree, texel.tau, p0, p1, level, kTransmittanceCutoff);
+        counters.voxels += near.blocks;
+        if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
+        const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
+        return near.transmittance * cachedShadow(slot, primIndex, rEnd, l);
+    }
+
+    // The lattice's value at cell coordinates r of primitive `primIndex`. A node is one exact
+    // shadow ray from its point, at the level of the lattice's spacing; node rays are shared by
+    // all pixels, so they are not counted in any tile's statistics (which would then depend on
+    // which tile came first).
+    double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l) const {
+        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
+        const double spacing = 1.0 / double(mLightCache.grid(primIndex).nw);
+        return mLightCache.lookup(slot, primIndex, r, [&](const Vec3& node) {
+            // Nodes on the cell's faces move in by a hair, so that the ray starts inside.
+            const Vec3 rn = node.cwiseMax(Vec3::Constant(1e-4)).cwiseMin(Vec3::Constant(1 - 1e-4));
+            Counters uncounted;
+            return tracedShadow(prim.cell.map(rn), l, std::numeric_limits<double>::infinity(),
+                                localScale(prim.cell, rn, surface) * spacing, primIndex, rn, uncounted);
+        });
+    }
+
+    detail::LightTransmittanceCache makeLightCache() const {
+        const int n = mOptions.shadowCacheResolution;
+        if (n <= 0) return {};
+        std::vector<Vec3> directions;
+        for (const Light& light : mScene.lights)
+            if (light.type == LightType::Directional &&
+                std::find(directions.begin(), directions.end(), Vec3(-light.direction)) == directions.end())
+                directions.push_back(-light.direction);
+        std::vector<detail::LightTransmittanceCache::Grid> grids(mTracer.prims().size());
+        if (!directions.empty())
+            for (std::size_t i = 0; i < grids.size(); ++i) {
+                const Prim& prim = mTracer.prims()[i];
+                if (!prim.textured) continue;
+                const SurfaceRuntime& s = mSurfaces[std::size_t(prim.surface)];
+                const auto across = [&](double repeat) { return n * int(std::clamp(std::ceil(repeat), 1.0, 16.0)); };
+                grids[i] = {across(s.repeatU), across(s.repeatV), n};
+            }
+        return detail::LightTransmittanceCache(std::move(directions), std::move(grids));
+    }
+
+    // The exact path: one ray toward the light.
+    double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
+                        Counters& counters) const {
         ++counters.shadow;
         double transmittance = 1;
         double tNear = 0;
@@ -338,6 +427,34 @@ private:
             std::array<double, kTrackCapacity> s, t;
         };
         std::array<ShadowTrack, 16> tracks;
+        // A directional light's direction and irradiance do not depend on the point, nor its
+        // reference-space direction within the span: taken once per span.
+        struct SpanLight {
+            bool directional = false;
+            bool usable = false;  ///< directional: lr is finite
+            Vec3 lw, lr;
+            Color e;
+        };
+        std::array<SpanLight, 16> spanLights;
+        bool anyPointLight = false;
+        const auto referenceLight = [&](const Vec3& lw, Vec3& lr) {
+            lr = jtInv * lw;
+            const double len = lr.norm();
+            if (!(len > 0) || !std::isfinite(len)) return false;
+            lr /= len;
+            return true;
+        };
+        for (std::size_t i = 0; i < lights; ++i) {
+            SpanLight& sl = spanLights[i];
+            if (mScene.lights[i].type != LightType::Directional) {
+                anyPointLight = true;
+                continue;
+            }
+            double distance;
+            sl.directional = true;
+            lightAt(mScene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
+            sl.usable = referenceLight(sl.lw, sl.lr);
+        }
         const auto run = [&](int level, bool record) {
             Result r;
             std::array<double, 16> shadowT{};
@@ -357,12 +474,26 @@ private:
                     const double tWorld = tIn + (tOut - tIn) * (sm / length);
                     const Color albedo(data.albedo[0], data.albedo[1], data.albedo[2]);
                     Color lk = m.ambient.cwiseProduct(albedo);
-                    const Vec3 x = prim.cell.map(rc);
+                    // The world point: for point lights, and for shadow rays.
+                    Vec3 x = Vec3::Zero();
+                    bool haveX = false;
+                    const auto worldPoint = [&]() -> const Vec3& {
+                        if (!haveX) x = prim.cell.map(rc);
+                        haveX = true;
+                        return x;
+                    };
+                    if (anyPointLight) worldPoint();
                     for (std::size_t i = 0; i < lights; ++i) {
+                        const SpanLight& sl = spanLights[i];
                         Vec3 lw;
-                        double distance;
+                        double distance = std::numeric_limits<double>::infinity();
                         Color e;
-                        if (!lightAt(mScene.lights[i], x, lw, distance, e)) continue;
+                        if (sl.directional) {
+                            lw = sl.lw;
+                            e = sl.e;
+                        } else if (!lightAt(mScene.lights[i], x, lw, distance, e)) {
+                            continue;
+                        }
                         // One shadow ray at the first lit voxel, another each time the local
                         // transmittance has fallen to a quarter since: the shadow varies with
                         // depth into the texel, not from voxel to voxel.
@@ -382,7 +513,7 @@ private:
                             if (nearest >= 0) {
                                 shadowT[i] = track.t[std::size_t(nearest)];
                             } else {
-                                shadowT[i] = shadowTransmittance(x, lw, distance, kShadowConeScale * mConeSpread * tWorld,
+                                shadowT[i] = shadowTransmittance(worldPoint(), lw, distance, kShadowConeScale * mConeSpread * tWorld,
                                                                  int(&prim - mTracer.prims().data()), rc, counters);
                                 if (record && track.count < kTrackCapacity) {
                                     track.s[std::size_t(track.count)] = sm;
@@ -394,10 +525,8 @@ private:
                             shadowValid[i] = true;
                         }
                         if (shadowT[i] <= 0) continue;
-                        Vec3 lr = jtInv * lw;
-                        const double len = lr.norm();
-                        if (!(len > 0) || !std::isfinite(len)) continue;
-                        lr /= len;
+                        Vec3 lr = sl.lr;
+                        if (sl.directional ? !sl.usable : !referenceLight(lw, lr)) continue;
                         ++counters.reflectance;
                         const auto f = mOptions.shading == ShadingMode::Fast
                                            ? reflectanceFast(sMatrix, lr, view, m.shininess)
@@ -432,6 +561,7 @@ private:
     const std::vector<SurfaceRuntime>& mSurfaces;
     const std::vector<TexelRuntime>& mTexels;
     double mConeSpread;
+    detail::LightTransmittanceCache mLightCache = makeLightCache();
 };
 
 }  // namespace
