@@ -392,9 +392,15 @@ private:
         const double scale = localScale(prim.cell, rMid, surface);
         const double tMid = 0.5 * (tIn + tOut);
         const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, texel.maxLevel);
+        // A blend weight below mOptions.blendCutoff goes to the other level, which is then the
+        // only one marched: the image moves by at most that weight times the difference of the
+        // two levels' results (bounded by the test SkippedBlendLevelsMatchTheFullBlend).
+        double fineWeight = choice.fineWeight;
+        if (fineWeight > 0 && fineWeight < mOptions.blendCutoff) fineWeight = 0;
+        if (fineWeight > 1 - mOptions.blendCutoff) fineWeight = 1;
         if (counters.histogram.size() < std::size_t(texel.maxLevel + 1)) counters.histogram.resize(std::size_t(texel.maxLevel + 1), 0.0);
-        counters.histogram[std::size_t(choice.coarse)] += 1 - choice.fineWeight;
-        if (choice.fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += choice.fineWeight;
+        if (fineWeight < 1) counters.histogram[std::size_t(choice.coarse)] += 1 - fineWeight;
+        if (fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += fineWeight;
 
         // Light directions go to reference space through the inverse Jacobian of the tiled map,
         // taken once per span (the mild-deformation assumption again).
@@ -539,12 +545,17 @@ private:
                 });
             return r;
         };
-        Result result = run(choice.coarse, mOptions.shareShadowRays);
-        if (choice.fineWeight > 0) {
-            const Result fine = run(choice.fine, false);
-            const double w = choice.fineWeight;
-            result.radiance = (1 - w) * result.radiance + w * fine.radiance;
-            result.transmittance = (1 - w) * result.transmittance + w * fine.transmittance;
+        Result result;
+        if (fineWeight >= 1) {
+            result = run(choice.fine, false);
+        } else {
+            result = run(choice.coarse, mOptions.shareShadowRays);
+            if (fineWeight > 0) {
+                const Result fine = run(choice.fine, false);
+                const double w = fineWeight;
+                result.radiance = (1 - w) * result.radiance + w * fine.radiance;
+                result.transmittance = (1 - w) * result.transmittance + w * fine.transmittance;
+            }
         }
         const double before = state.transmittance;
         state.radiance += before * result.radiance;

@@ -47,6 +47,9 @@ struct RenderOptions {
     /// of the texel across), each node one shadow ray cast on first use (docs/render.md,
     /// "Shadows"); 0: every query casts its own ray (the exact path).
     int shadowCacheResolution = 8;
+    /// A level whose blend weight is below this is not marched, its weight going to the other
+    /// level (docs/render.md, "Levels"); 0: both levels of every blend are marched (exact).
+    double blendCutoff = 0.1;
 };
 
 struct RenderStats {
