@@ -315,7 +315,7 @@ private:
     }
 
     detail::LightTransmittanceCache makeLightCache() const {
-        const int n = mOptions.shadowCacheResolution;
+        const int n = std::min(mOptions.shadowCacheResolution, 256);
         if (n <= 0) return {};
         std::vector<Vec3> directions;
         for (const Light& light : mScene.lights)
@@ -323,14 +323,23 @@ private:
                 std::find(directions.begin(), directions.end(), Vec3(-light.direction)) == directions.end())
                 directions.push_back(-light.direction);
         std::vector<detail::LightTransmittanceCache::Grid> grids(mTracer.prims().size());
+        // Node blocks are allocated as cells are first queried; the lattice is used only when
+        // all of them together would fit in kMaxLatticeNodes (a decision taken here, before any
+        // pixel, so that it does not depend on the order of the tiles), otherwise every query
+        // casts its ray. Beyond 4 tiles of the texel across a cell, the lattice gets coarser
+        // than 8 steps per tile.
+        constexpr double kMaxLatticeNodes = double(1 << 26);  // 256 MB of floats
+        double total = 0;
         if (!directions.empty())
             for (std::size_t i = 0; i < grids.size(); ++i) {
                 const Prim& prim = mTracer.prims()[i];
                 if (!prim.textured) continue;
                 const SurfaceRuntime& s = mSurfaces[std::size_t(prim.surface)];
-                const auto across = [&](double repeat) { return n * int(std::clamp(std::ceil(repeat), 1.0, 16.0)); };
+                const auto across = [&](double repeat) { return n * int(std::clamp(std::ceil(repeat), 1.0, 4.0)); };
                 grids[i] = {across(s.repeatU), across(s.repeatV), n};
+                total += double(grids[i].nodes()) * double(directions.size());
             }
+        if (total > kMaxLatticeNodes) return {};
         return detail::LightTransmittanceCache(std::move(directions), std::move(grids));
     }
 

@@ -44,8 +44,9 @@ struct RenderOptions {
     bool shareShadowRays = true;
     /// Directional lights: a shadow query inside a texel cell marches one lattice step toward the
     /// light exactly, then interpolates a per-cell lattice of this many steps per side (per tile
-    /// of the texel across), each node one shadow ray cast on first use (docs/render.md,
-    /// "Shadows"); 0: every query casts its own ray (the exact path).
+    /// of the texel across, up to 4 tiles), each node one shadow ray cast on first use
+    /// (docs/render.md, "Shadows"); 0: every query casts its own ray (the exact path), as when
+    /// the lattices of all cells would exceed 2^26 nodes.
     int shadowCacheResolution = 8;
     /// A level whose blend weight is below this is not marched, its weight going to the other
     /// level (docs/render.md, "Levels"); 0: both levels of every blend are marched (exact).
