@@ -290,7 +290,8 @@ private:
         const double scale = localScale(prim.cell, r, surface);
         const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
         const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
-        const SegmentTransmittance near = marchTransmittance(*texel.tree, texel.tau, p0, p1, level, kTransmittanceCutoff);
+        const SegmentTransmittance near = marchTransmittance(*texel.tree, texel.tau, p0, p1, level, kTransmittanceCutoff,
+                                                             &mEmptySpace[std::size_t(surface.texel)]);
         counters.voxels += near.blocks;
         if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
         const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
@@ -370,7 +371,8 @@ private:
                 const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
                 const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
                 const SegmentTransmittance seg = marchTransmittance(*texel.tree, texel.tau, p0, p1, level,
-                                                                    kTransmittanceCutoff / transmittance);
+                                                                    kTransmittanceCutoff / transmittance,
+                                                                    &mEmptySpace[std::size_t(surface.texel)]);
                 counters.voxels += seg.blocks;
                 transmittance *= seg.transmittance;
                 if (transmittance <= kTransmittanceCutoff) return 0;
@@ -551,7 +553,7 @@ private:
                     r.radiance += r.transmittance * alpha * lk;
                     r.transmittance *= 1 - alpha;
                     return startT * r.transmittance > kTransmittanceCutoff;
-                });
+                }, mEmptySpace[std::size_t(surface.texel)].level(level));
             return r;
         };
         Result result;
@@ -582,6 +584,16 @@ private:
     const std::vector<TexelRuntime>& mTexels;
     double mConeSpread;
     detail::LightTransmittanceCache mLightCache = makeLightCache();
+    std::vector<EmptySpace> mEmptySpace = makeEmptySpace();
+
+    // Empty-space distances of each texel's octree (texel_march.h), for the marches to leap over
+    // runs of empty voxels; same images, fewer empty steps.
+    std::vector<EmptySpace> makeEmptySpace() const {
+        std::vector<EmptySpace> out(mTexels.size());
+        for (std::size_t i = 0; i < mTexels.size(); ++i)
+            if (mTexels[i].tree) out[i] = emptySpace(*mTexels[i].tree);
+        return out;
+    }
 };
 
 }  // namespace
