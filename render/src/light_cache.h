@@ -4,8 +4,8 @@
 // on the ray that needs it: every texel cell gets a lattice of nodes in its cell coordinates
 // (u, v, w), each holding T at the node (one exact shadow ray, cast the first time a query
 // needs it), and a query interpolates the eight nodes around it trilinearly (the renderer
-// marches the first lattice step from the query point exactly and looks the lattice up where
-// that step ends). An approximation, bounded against the exact shadow rays by the test
+// marches the first two lattice steps from the query point exactly, within the cell, and looks
+// the lattice up where that march ends). An approximation, bounded against the exact shadow rays by the test
 // CachedShadowsMatchShadowRays.
 //
 // A node's value is a function of the node alone, so whichever thread fills it first writes

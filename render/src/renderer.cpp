@@ -50,6 +50,8 @@ constexpr double kTransmittanceCutoff = 1e-4;
 // Shadow rays from inside a texel march one level coarser than the camera ray (a cone twice as
 // wide): soft shadows need less detail than what is seen, and this halves their cost.
 constexpr double kShadowConeScale = 2.0;
+// Lattice steps marched exactly from a shadow query before the lattice is looked up.
+constexpr double kExactLatticeSteps = 2.0;
 
 struct TexelRuntime {
     std::shared_ptr<const octree::Octree> tree;
@@ -262,10 +264,13 @@ private:
         return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters);
     }
 
-    // A query at cell coordinates r: the exact transmittance over the first lattice step toward
-    // the light (marched in the cell's texel at the query's own level: the voxels next to the
-    // point, which a lit voxel's own column or leaf makes darker than the lattice nodes around
-    // it), times the lattice's value where that step ends.
+    // A query at cell coordinates r: the exact transmittance over the first kExactLatticeSteps
+    // lattice steps toward the light (marched in the cell's texel at the query's own level: the
+    // voxels next to the point, which a lit voxel's own column or leaf makes darker than the
+    // lattice nodes around it), times the lattice's value where that march ends. The march stops
+    // at the cell's sides, so that the lattice looked up is the right one. Two steps rather than
+    // one: on the forest PSNR 49.1 instead of 47.7 dB (sparse bush), 42.4 instead of 41.4 (dense
+    // bush, where the lattice blurs the terminator), for no measurable time.
     double nearAndCachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, double width,
                                Counters& counters) const {
         const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
@@ -279,7 +284,13 @@ private:
         if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
         lr /= len;
         const Vec3 p0 = tile(r, surface);
-        double step = 1.0 / double(mLightCache.grid(primIndex).nw);
+        double step = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
+        // Not past the cell's sides: the lattice looked up where the march ends is this cell's.
+        const double extent[2] = {surface.repeatU, surface.repeatV};
+        for (int a = 0; a < 2; ++a) {
+            if (lr[a] > 0) step = std::min(step, std::max(0.0, (extent[a] - p0[a]) / lr[a]));
+            else if (lr[a] < 0) step = std::min(step, std::max(0.0, -p0[a] / lr[a]));
+        }
         bool floor = false;
         if (p0.z() + step * lr.z() > 1) step = std::max(0.0, (1 - p0.z()) / lr.z());
         if (p0.z() + step * lr.z() < 0) {

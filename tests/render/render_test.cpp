@@ -344,10 +344,12 @@ TEST(Render, SharedShadowRaysMatchPerLevelShadowRays) {
 // approximation of the exact path where every query casts its own ray. The same hard case as
 // above: sparse one-voxel columns under a grazing light, whose shadows change from voxel to
 // voxel, against a lattice of 8 steps per cell (the default) and 16. Measured (8; 16): mean
-// −1.6%; +3.2%, 8×8-block relative RMSE 8.3%; 8.1%, per-pixel 23%; 20%. Without the exact first
-// step the lattice alone was 14% too bright (its nodes sit in the gaps between the columns, the
-// lit voxels in them) with 21% block error. Bound: mean within 5%, blocks below 11%, pixels
-// below 28%.
+// +0.6%; +3.3%, 8×8-block relative RMSE 1.9%; 5.0%, per-pixel 7.6%; 12.5%. Without the exact
+// first steps the lattice alone was 14% too bright (its nodes sit in the gaps between the
+// columns, the lit voxels in them) with 21% block error; with one exact step not clipped at the
+// cell's sides, 8.3% block error; two unclipped steps, 14% (the lattice was looked up at the
+// side, far from where the march ended). Bound: mean within 5%, blocks below 7%, pixels below
+// 16%.
 TEST(Render, CachedShadowsMatchShadowRays) {
     Scene scene = grassPlane(64);
     scene.lights[0].direction = Eigen::Vector3d(-0.8, 0.3, -0.5).normalized();
@@ -365,8 +367,8 @@ TEST(Render, CachedShadowsMatchShadowRays) {
                   << "), means " << meanAbs(cached.image) << " " << meanAbs(exact.image) << "\n";
         RecordProperty("relative_rmse_" + std::to_string(n), std::to_string(error));
         RecordProperty("block_relative_rmse_" + std::to_string(n), std::to_string(blockError));
-        EXPECT_LT(error, 0.28) << "images in " << dumpImages("cached_shadows_" + std::to_string(n), cached.image, exact.image);
-        EXPECT_LT(blockError, 0.11);
+        EXPECT_LT(error, 0.16) << "images in " << dumpImages("cached_shadows_" + std::to_string(n), cached.image, exact.image);
+        EXPECT_LT(blockError, 0.07);
         EXPECT_NEAR(meanAbs(cached.image) / meanAbs(exact.image), 1.0, 0.05);
         // The statistics count shadow queries, cached or not.
         EXPECT_EQ(cached.stats.shadowRays, exact.stats.shadowRays);
