@@ -56,7 +56,7 @@ TEST(March, EmptySpaceLeapsVisitTheSameBlocks) {
     const auto tree = makeOctree(levels, [&](int x, int y, int z) -> std::optional<vtex::octree::VoxelData> {
         // Scattered voxels (about one in 300, like leaves): the octree's empty blocks are small,
         // the runs of empty voxels along a ray long.
-        const std::uint32_t h = std::uint32_t(x * 73856093) ^ std::uint32_t(y * 19349663) ^ std::uint32_t(z * 83492791);
+        const std::uint32_t h = std::uint32_t(x) * 73856093u ^ std::uint32_t(y) * 19349663u ^ std::uint32_t(z) * 83492791u;
         if ((h * 2654435761u) % 300u != 0) return std::nullopt;
         return sphereVoxel(1.0f + float((x + y + z) % 3));
     }, true);
