@@ -95,11 +95,19 @@ struct LocateCursor {
 /// Marches p0 + s·dir, s ∈ [0, length] (reference units, dir unit), at `level`, calling
 /// visit(node, s0, ds) for every non-empty block in front-to-back order; visit returns false to
 /// stop. Returns the number of blocks stepped through (empty ones included).
+///
+/// `distance`: null, or the empty-space distances of `level` (EmptySpace, texel_march.h): from an
+/// empty voxel at distance d the ray leaps to where it leaves the empty (2d−1)³ cube around it.
+/// That exit is a voxel face crossed by the same expression as without the leap, so the
+/// non-empty blocks are visited over bit-identical intervals; only empty steps are saved.
 template <class Visit>
 std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Vector3d& p0,
-                          const Eigen::Vector3d& dir, double length, Visit&& visit) {
+                          const Eigen::Vector3d& dir, double length, Visit&& visit,
+                          const std::uint8_t* distance = nullptr) {
     if (tree.levels.empty() || tree.levels[0].empty() || !(length > 0)) return 0;
+    const int requested = level;
     level = std::clamp(level, 0, std::min(int(tree.levels.size()) - 1, 30));
+    if (level != requested) distance = nullptr;  // the map is for the requested level
     const std::int64_t n = std::int64_t(1) << level;
     const double invN = 1.0 / double(n);
     // Every step looks the block up a little past its entry so that a point on a block face
@@ -135,7 +143,26 @@ std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Ve
             if (dir[a] > 0) exit = std::min(exit, (double(base[a] + size) * invN - p0[a]) * invDir[a]);
             else if (dir[a] < 0) exit = std::min(exit, (double(base[a]) * invN - p0[a]) * invDir[a]);
         }
+        if (!found.node && distance) {
+            const std::int64_t d = distance[(std::size_t(idx[2]) * std::size_t(n) + wy) * std::size_t(n) + wx];
+            if (d > 1) {
+                // The cube idx ± (d − 1) is empty; z is kept inside the grid, where the march
+                // clamps its index.
+                double leap = length;
+                for (int a = 0; a < 3; ++a) {
+                    if (dir[a] > 0) {
+                        const std::int64_t plane = a == 2 ? std::min(idx[a] + d, n) : idx[a] + d;
+                        leap = std::min(leap, (double(plane) * invN - p0[a]) * invDir[a]);
+                    } else if (dir[a] < 0) {
+                        const std::int64_t plane = a == 2 ? std::max(idx[a] - d + 1, std::int64_t(0)) : idx[a] - d + 1;
+                        leap = std::min(leap, (double(plane) * invN - p0[a]) * invDir[a]);
+                    }
+                }
+                exit = std::max(exit, leap);
+            }
+        }
         if (!(exit > s)) exit = std::min(length, sq);  // rounding: never stand still
+        if (!(exit > s)) exit = length;  // within rounding of the end, where sq = s
         if (found.node && !visit(*found.node, s, exit - s)) return steps;
         s = exit;
     }

@@ -14,6 +14,7 @@
 
 #include "footprint.h"
 #include "frame.h"
+#include "light_cache.h"
 #include "march.h"
 #include "tracer.h"
 
@@ -56,6 +57,8 @@ constexpr double kTransmittanceCutoff = 1e-4;
 // Shadow rays from inside a texel march one level coarser than the camera ray (a cone twice as
 // wide): soft shadows need less detail than what is seen, and this halves their cost.
 constexpr double kShadowConeScale = 2.0;
+// Lattice steps marched exactly from a shadow query before the lattice is looked up.
+constexpr double kExactLatticeSteps = 2.0;
 
 struct TexelRuntime {
     std::shared_ptr<const octree::Octree> tree;
@@ -149,6 +152,113 @@ private:
     // (world units, held constant along the shadow ray).
     double shadowTransmittance(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim,
                                const Vec3& hintR, Counters& counters) const {
+        // A directional light and a point inside a texel cell: the cell's transmittance lattice.
+        if (mOptions.shadowCacheResolution > 0 && std::isinf(tMax)) {
+            const int slot = mLightCache.slot(l);
+            if (slot >= 0) {
+                if (hintPrim >= 0 && mLightCache.grid(hintPrim).nw > 0) {
+                    ++counters.shadow;
+                    return nearAndCachedShadow(slot, hintPrim, hintR, l, width, counters);
+                }
+            }
+        }
+        return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters);
+    }
+
+    // A query at cell coordinates r: the exact transmittance over the first kExactLatticeSteps
+    // lattice steps toward the light (marched in the cell's texel at the query's own level: the
+    // voxels next to the point, which a lit voxel's own column or leaf makes darker than the
+    // lattice nodes around it), times the lattice's value where that march ends. The march stops
+    // at the cell's sides, so that the lattice looked up is the right one. Two steps rather than
+    // one: on the forest PSNR 49.1 instead of 47.7 dB (sparse bush), 42.4 instead of 41.4 (dense
+    // bush, where the lattice blurs the terminator), for no measurable time.
+    double nearAndCachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, double width,
+                               Counters& counters) const {
+        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
+        const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
+        Mat3 jt = prim.cell.jacobian(r);
+        jt.col(0) /= surface.repeatU;
+        jt.col(1) /= surface.repeatV;
+        Vec3 lr = jt.inverse() * l;
+        const double len = lr.norm();
+        if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
+        lr /= len;
+        const Vec3 p0 = tile(r, surface);
+        double step = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
+        // Not past the cell's sides: the lattice looked up where the march ends is this cell's.
+        const double extent[2] = {surface.repeatU, surface.repeatV};
+        for (int a = 0; a < 2; ++a) {
+            if (lr[a] > 0) step = std::min(step, std::max(0.0, (extent[a] - p0[a]) / lr[a]));
+            else if (lr[a] < 0) step = std::min(step, std::max(0.0, -p0[a] / lr[a]));
+        }
+        bool floor = false;
+        if (p0.z() + step * lr.z() > 1) step = std::max(0.0, (1 - p0.z()) / lr.z());
+        if (p0.z() + step * lr.z() < 0) {
+            step = std::max(0.0, -p0.z() / lr.z());
+            floor = true;  // the step reaches the base surface, which blocks
+        }
+        const Vec3 p1 = p0 + step * lr;
+        const double scale = localScale(prim.cell, r, surface);
+        const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
+        const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
+        const SegmentTransmittance near = marchTransmittance(*texel.tree, texel.tau, p0, p1, level, kTransmittanceCutoff,
+                                                             &mEmptySpace[std::size_t(surface.texel)]);
+        counters.voxels += near.blocks;
+        if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
+        const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
+        return near.transmittance * cachedShadow(slot, primIndex, rEnd, l);
+    }
+
+    // The lattice's value at cell coordinates r of primitive `primIndex`. A node is one exact
+    // shadow ray from its point, at the level of the lattice's spacing; node rays are shared by
+    // all pixels, so they are not counted in any tile's statistics (which would then depend on
+    // which tile came first).
+    double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l) const {
+        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
+        const double spacing = 1.0 / double(mLightCache.grid(primIndex).nw);
+        return mLightCache.lookup(slot, primIndex, r, [&](const Vec3& node) {
+            // Nodes on the cell's faces move in by a hair, so that the ray starts inside.
+            const Vec3 rn = node.cwiseMax(Vec3::Constant(1e-4)).cwiseMin(Vec3::Constant(1 - 1e-4));
+            Counters uncounted;
+            return tracedShadow(prim.cell.map(rn), l, std::numeric_limits<double>::infinity(),
+                                localScale(prim.cell, rn, surface) * spacing, primIndex, rn, uncounted);
+        });
+    }
+
+    detail::LightTransmittanceCache makeLightCache() const {
+        const int n = std::min(mOptions.shadowCacheResolution, 256);
+        if (n <= 0) return {};
+        std::vector<Vec3> directions;
+        for (const Light& light : mScene.lights)
+            if (light.type == LightType::Directional &&
+                std::find(directions.begin(), directions.end(), Vec3(-light.direction)) == directions.end())
+                directions.push_back(-light.direction);
+        std::vector<detail::LightTransmittanceCache::Grid> grids(mTracer.prims().size());
+        // Node blocks are allocated as cells are first queried; the lattice is used only when
+        // all of them together would fit in kMaxLatticeNodes (a decision taken here, before any
+        // pixel, so that it does not depend on the order of the tiles), otherwise every query
+        // casts its ray. Beyond 4 tiles of the texel across a cell, the lattice gets coarser
+        // than 8 steps per tile.
+        constexpr double kMaxLatticeNodes = double(1 << 26);  // 256 MB of floats
+        double total = 0;
+        if (!directions.empty())
+            for (std::size_t i = 0; i < grids.size(); ++i) {
+                const Prim& prim = mTracer.prims()[i];
+                if (!prim.textured) continue;
+                const SurfaceRuntime& s = mSurfaces[std::size_t(prim.surface)];
+                const auto across = [&](double repeat) { return n * int(std::clamp(std::ceil(repeat), 1.0, 4.0)); };
+                grids[i] = {across(s.repeatU), across(s.repeatV), n};
+                total += double(grids[i].nodes()) * double(directions.size());
+            }
+        if (total > kMaxLatticeNodes) return {};
+        return detail::LightTransmittanceCache(std::move(directions), std::move(grids));
+    }
+
+    // The exact path: one ray toward the light.
+    double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
+                        Counters& counters) const {
         ++counters.shadow;
         double transmittance = 1;
         double tNear = 0;
@@ -173,7 +283,8 @@ private:
                 const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
                 const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
                 const SegmentTransmittance seg = marchTransmittance(*texel.tree, texel.tau, p0, p1, level,
-                                                                    kTransmittanceCutoff / transmittance);
+                                                                    kTransmittanceCutoff / transmittance,
+                                                                    &mEmptySpace[std::size_t(surface.texel)]);
                 counters.voxels += seg.blocks;
                 transmittance *= seg.transmittance;
                 if (transmittance <= kTransmittanceCutoff) return 0;
@@ -204,9 +315,15 @@ private:
         const double scale = localScale(prim.cell, rMid, surface);
         const double tMid = 0.5 * (tIn + tOut);
         const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, texel.maxLevel);
+        // A blend weight below mOptions.blendCutoff goes to the other level, which is then the
+        // only one marched: the image moves by at most that weight times the difference of the
+        // two levels' results (bounded by the test SkippedBlendLevelsMatchTheFullBlend).
+        double fineWeight = choice.fineWeight;
+        if (fineWeight > 0 && fineWeight < mOptions.blendCutoff) fineWeight = 0;
+        if (fineWeight > 1 - mOptions.blendCutoff) fineWeight = 1;
         if (counters.histogram.size() < std::size_t(texel.maxLevel + 1)) counters.histogram.resize(std::size_t(texel.maxLevel + 1), 0.0);
-        counters.histogram[std::size_t(choice.coarse)] += 1 - choice.fineWeight;
-        if (choice.fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += choice.fineWeight;
+        if (fineWeight < 1) counters.histogram[std::size_t(choice.coarse)] += 1 - fineWeight;
+        if (fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += fineWeight;
 
         // Light directions go to reference space through the inverse Jacobian of the tiled map,
         // taken once per span (the mild-deformation assumption again).
@@ -239,6 +356,34 @@ private:
             std::array<double, kTrackCapacity> s, t;
         };
         std::array<ShadowTrack, 16> tracks;
+        // A directional light's direction and irradiance do not depend on the point, nor its
+        // reference-space direction within the span: taken once per span.
+        struct SpanLight {
+            bool directional = false;
+            bool usable = false;  ///< directional: lr is finite
+            Vec3 lw, lr;
+            Color e;
+        };
+        std::array<SpanLight, 16> spanLights;
+        bool anyPointLight = false;
+        const auto referenceLight = [&](const Vec3& lw, Vec3& lr) {
+            lr = jtInv * lw;
+            const double len = lr.norm();
+            if (!(len > 0) || !std::isfinite(len)) return false;
+            lr /= len;
+            return true;
+        };
+        for (std::size_t i = 0; i < lights; ++i) {
+            SpanLight& sl = spanLights[i];
+            if (mScene.lights[i].type != LightType::Directional) {
+                anyPointLight = true;
+                continue;
+            }
+            double distance;
+            sl.directional = true;
+            lightAt(mScene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
+            sl.usable = referenceLight(sl.lw, sl.lr);
+        }
         const auto run = [&](int level, bool record) {
             Result r;
             std::array<double, 16> shadowT{};
@@ -258,12 +403,26 @@ private:
                     const double tWorld = tIn + (tOut - tIn) * (sm / length);
                     const Color albedo(data.albedo[0], data.albedo[1], data.albedo[2]);
                     Color lk = m.ambient.cwiseProduct(albedo);
-                    const Vec3 x = prim.cell.map(rc);
+                    // The world point: for point lights, and for shadow rays.
+                    Vec3 x = Vec3::Zero();
+                    bool haveX = false;
+                    const auto worldPoint = [&]() -> const Vec3& {
+                        if (!haveX) x = prim.cell.map(rc);
+                        haveX = true;
+                        return x;
+                    };
+                    if (anyPointLight) worldPoint();
                     for (std::size_t i = 0; i < lights; ++i) {
+                        const SpanLight& sl = spanLights[i];
                         Vec3 lw;
-                        double distance;
+                        double distance = std::numeric_limits<double>::infinity();
                         Color e;
-                        if (!lightAt(mScene.lights[i], x, lw, distance, e)) continue;
+                        if (sl.directional) {
+                            lw = sl.lw;
+                            e = sl.e;
+                        } else if (!lightAt(mScene.lights[i], x, lw, distance, e)) {
+                            continue;
+                        }
                         // One shadow ray at the first lit voxel, another each time the local
                         // transmittance has fallen to a quarter since: the shadow varies with
                         // depth into the texel, not from voxel to voxel.
@@ -283,7 +442,7 @@ private:
                             if (nearest >= 0) {
                                 shadowT[i] = track.t[std::size_t(nearest)];
                             } else {
-                                shadowT[i] = shadowTransmittance(x, lw, distance, kShadowConeScale * mConeSpread * tWorld,
+                                shadowT[i] = shadowTransmittance(worldPoint(), lw, distance, kShadowConeScale * mConeSpread * tWorld,
                                                                  int(&prim - mTracer.prims().data()), rc, counters);
                                 if (record && track.count < kTrackCapacity) {
                                     track.s[std::size_t(track.count)] = sm;
@@ -295,10 +454,8 @@ private:
                             shadowValid[i] = true;
                         }
                         if (shadowT[i] <= 0) continue;
-                        Vec3 lr = jtInv * lw;
-                        const double len = lr.norm();
-                        if (!(len > 0) || !std::isfinite(len)) continue;
-                        lr /= len;
+                        Vec3 lr = sl.lr;
+                        if (sl.directional ? !sl.usable : !referenceLight(lw, lr)) continue;
                         ++counters.reflectance;
                         const auto f = mOptions.shading == ShadingMode::Fast
                                            ? reflectanceFast(sMatrix, lr, view, m.shininess)
@@ -308,15 +465,20 @@ private:
                     r.radiance += r.transmittance * alpha * lk;
                     r.transmittance *= 1 - alpha;
                     return startT * r.transmittance > kTransmittanceCutoff;
-                });
+                }, mEmptySpace[std::size_t(surface.texel)].level(level));
             return r;
         };
-        Result result = run(choice.coarse, mOptions.shareShadowRays);
-        if (choice.fineWeight > 0) {
-            const Result fine = run(choice.fine, false);
-            const double w = choice.fineWeight;
-            result.radiance = (1 - w) * result.radiance + w * fine.radiance;
-            result.transmittance = (1 - w) * result.transmittance + w * fine.transmittance;
+        Result result;
+        if (fineWeight >= 1) {
+            result = run(choice.fine, false);
+        } else {
+            result = run(choice.coarse, mOptions.shareShadowRays);
+            if (fineWeight > 0) {
+                const Result fine = run(choice.fine, false);
+                const double w = fineWeight;
+                result.radiance = (1 - w) * result.radiance + w * fine.radiance;
+                result.transmittance = (1 - w) * result.transmittance + w * fine.transmittance;
+            }
         }
         const double before = state.transmittance;
         state.radiance += before * result.radiance;
@@ -333,6 +495,17 @@ private:
     const std::vector<SurfaceRuntime>& mSurfaces;
     const std::vector<TexelRuntime>& mTexels;
     double mConeSpread;
+    detail::LightTransmittanceCache mLightCache = makeLightCache();
+    std::vector<EmptySpace> mEmptySpace = makeEmptySpace();
+
+    // Empty-space distances of each texel's octree (texel_march.h), for the marches to leap over
+    // runs of empty voxels; same images, fewer empty steps.
+    std::vector<EmptySpace> makeEmptySpace() const {
+        std::vector<EmptySpace> out(mTexels.size());
+        for (std::size_t i = 0; i < mTexels.size(); ++i)
+            if (mTexels[i].tree) out[i] = emptySpace(*mTexels[i].tree);
+        return out;
+    }
 };
 
 }  // namespace

@@ -8,6 +8,10 @@
 #include <cmath>
 #include <numbers>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace vtex::render {
 
 using Eigen::Vector3d;
@@ -35,17 +39,19 @@ SggxMatrix voxelS(const octree::VoxelData& voxel) {
 
 namespace {
 
-// Fixed points on the unit disc: a Fibonacci lattice, radius √((i+½)/n) for equal areas.
+// Fixed points on the unit disc: a Fibonacci lattice, radius √((i+½)/n) for equal areas. Kept
+// in single precision for the 4-wide loop below (n is a multiple of 4).
 struct DiscLattice {
-    std::array<double, 64> x{}, y{}, z{};  ///< z: the point lifted onto the hemisphere
+    alignas(16) std::array<float, 64> x{}, y{}, z{};  ///< z: the point lifted onto the hemisphere
     int n = 0;
     explicit DiscLattice(int count) : n(count) {
         const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
         for (int i = 0; i < n; ++i) {
             const double r = std::sqrt((i + 0.5) / n);
-            x[std::size_t(i)] = r * std::cos(golden * i);
-            y[std::size_t(i)] = r * std::sin(golden * i);
-            z[std::size_t(i)] = std::sqrt(std::max(0.0, 1 - x[std::size_t(i)] * x[std::size_t(i)] - y[std::size_t(i)] * y[std::size_t(i)]));
+            const double px = r * std::cos(golden * i), py = r * std::sin(golden * i);
+            x[std::size_t(i)] = float(px);
+            y[std::size_t(i)] = float(py);
+            z[std::size_t(i)] = float(std::sqrt(std::max(0.0, 1 - px * px - py * py)));
         }
     }
 };
@@ -109,13 +115,61 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
     const double lv = l.z();
 
     const DiscLattice& points = lattice(samples);
-    double diffuse = 0, specular = 0;
     const double specularNorm = (shininess + 2) / (2 * std::numbers::pi);
     // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
     const PhongPower power(shininess);
     const double cosCutoff = shininess <= 0 ? 0.0 : power.whole >= 0 ? kCosCutoffs[std::size_t(std::min(power.whole, 64))] : std::pow(1e-6, 1 / shininess);
-    // m = u·Mk + v·Mj + w·Mi with Mk = (·,0,0), Mj = (·,·,0): written out, and N·l tested on
-    // the unnormalised m so that facets in their own shadow skip the square root.
+    // m = u·Mk + v·Mj + w·Mi with Mk = (·,0,0), Mj = (·,·,0): written out. The sum runs in
+    // single precision, four lattice points at a time (SSE2, part of every x86-64): its
+    // rounding (~1e-7 relative) is far below the quadrature's own error.
+#if defined(__SSE2__)
+    const __m128 mkx = _mm_set1_ps(float(Mk.x())), mjx = _mm_set1_ps(float(Mj.x())), mjy = _mm_set1_ps(float(Mj.y()));
+    const __m128 mix = _mm_set1_ps(float(Mi.x())), miy = _mm_set1_ps(float(Mi.y())), miz = _mm_set1_ps(float(Mi.z()));
+    const __m128 lx = _mm_set1_ps(float(l.x())), ly = _mm_set1_ps(float(l.y())), lz = _mm_set1_ps(float(l.z()));
+    const __m128 lvv = _mm_set1_ps(float(lv)), cut = _mm_set1_ps(float(cosCutoff));
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), two = _mm_set1_ps(2.0f);
+    __m128 diffuseSum = zero, specularSum = zero;
+    for (int n = 0; n < points.n; n += 4) {
+        const __m128 u = _mm_load_ps(&points.x[std::size_t(n)]);
+        const __m128 v = _mm_load_ps(&points.y[std::size_t(n)]);
+        const __m128 w = _mm_load_ps(&points.z[std::size_t(n)]);
+        const __m128 mx = _mm_add_ps(_mm_add_ps(_mm_mul_ps(u, mkx), _mm_mul_ps(v, mjx)), _mm_mul_ps(w, mix));
+        const __m128 my = _mm_add_ps(_mm_mul_ps(v, mjy), _mm_mul_ps(w, miy));
+        const __m128 mz = _mm_mul_ps(w, miz);
+        const __m128 ml = _mm_add_ps(_mm_add_ps(_mm_mul_ps(mx, lx), _mm_mul_ps(my, ly)), _mm_mul_ps(mz, lz));
+        const __m128 len2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(mx, mx), _mm_mul_ps(my, my)), _mm_mul_ps(mz, mz));
+        // Facets in their own shadow (N·l ≤ 0) and degenerate m count nothing.
+        const __m128 lit = _mm_and_ps(_mm_cmpgt_ps(ml, zero), _mm_cmpgt_ps(len2, zero));
+        const __m128 invLen = _mm_div_ps(one, _mm_sqrt_ps(_mm_max_ps(len2, _mm_set1_ps(1e-30f))));
+        const __m128 nl = _mm_mul_ps(ml, invLen);
+        diffuseSum = _mm_add_ps(diffuseSum, _mm_and_ps(lit, nl));
+        // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
+        const __m128 cosAlpha = _mm_sub_ps(_mm_mul_ps(_mm_mul_ps(two, nl), _mm_mul_ps(mz, invLen)), lvv);
+        const __m128 specular = _mm_and_ps(lit, _mm_cmpgt_ps(cosAlpha, cut));
+        if (_mm_movemask_ps(specular) == 0) continue;
+        __m128 p;
+        if (power.whole >= 0) {
+            p = one;
+            __m128 base = cosAlpha;
+            for (int e = power.whole; e > 0; e >>= 1) {
+                if (e & 1) p = _mm_mul_ps(p, base);
+                base = _mm_mul_ps(base, base);
+            }
+        } else {
+            alignas(16) float c[4];
+            _mm_store_ps(c, _mm_max_ps(cosAlpha, zero));
+            for (float& x : c) x = float(std::pow(double(x), shininess));
+            p = _mm_load_ps(c);
+        }
+        specularSum = _mm_add_ps(specularSum, _mm_and_ps(specular, _mm_mul_ps(nl, p)));
+    }
+    alignas(16) float sums[8];
+    _mm_store_ps(sums, diffuseSum);
+    _mm_store_ps(sums + 4, specularSum);
+    const double diffuse = double(sums[0]) + double(sums[1]) + double(sums[2]) + double(sums[3]);
+    const double specular = double(sums[4]) + double(sums[5]) + double(sums[6]) + double(sums[7]);
+#else
+    double diffuse = 0, specular = 0;
     for (int n = 0; n < points.n; ++n) {
         const double u = points.x[std::size_t(n)], v = points.y[std::size_t(n)];
         const double w = points.z[std::size_t(n)];
@@ -133,6 +187,7 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
         const double cosAlpha = 2 * nl * (mz * invLen) - lv;
         if (cosAlpha > cosCutoff) specular += nl * power(cosAlpha);
     }
+#endif
     return {diffuse / (points.n * std::numbers::pi), specular * specularNorm / points.n};
 }
 

@@ -1,0 +1,102 @@
+// A per-cell cache of the transmittance toward a directional light (docs/render.md, "Shadows").
+//
+// For a directional light the transmittance toward it, T(x), depends on the point x only, not
+// on the ray that needs it: every texel cell gets a lattice of nodes in its cell coordinates
+// (u, v, w), each holding T at the node (one exact shadow ray, cast the first time a query
+// needs it), and a query interpolates the eight nodes around it trilinearly (the renderer
+// marches the first two lattice steps from the query point exactly, within the cell, and looks
+// the lattice up where that march ends). An approximation, bounded against the exact shadow rays by the test
+// CachedShadowsMatchShadowRays.
+//
+// A node's value is a function of the node alone, so whichever thread fills it first writes
+// the same value: images do not depend on the thread count or on the order of the tiles. Node
+// blocks are allocated on a cell's first query; a race allocates twice and keeps one.
+#pragma once
+
+#include <vtex/render/geometry.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace vtex::render::detail {
+
+class LightTransmittanceCache {
+public:
+    struct Grid {
+        int nu = 0, nv = 0, nw = 0;  ///< lattice cells per axis; nw = 0: no grid (plain face)
+        std::size_t nodes() const { return std::size_t(nu + 1) * std::size_t(nv + 1) * std::size_t(nw + 1); }
+    };
+
+    LightTransmittanceCache() = default;
+    /// `directions`: the distinct unit directions toward the directional lights; `grids`: one
+    /// per primitive.
+    LightTransmittanceCache(std::vector<Vec3> directions, std::vector<Grid> grids)
+        : mDirections(std::move(directions)), mGrids(std::move(grids)),
+          mBlocks(std::make_unique<std::atomic<std::atomic<float>*>[]>(mDirections.size() * mGrids.size())) {
+        for (std::size_t i = 0; i < mDirections.size() * mGrids.size(); ++i) mBlocks[i].store(nullptr);
+    }
+    ~LightTransmittanceCache() {
+        for (std::size_t i = 0; i < mDirections.size() * mGrids.size(); ++i) delete[] mBlocks[i].load();
+    }
+    LightTransmittanceCache(const LightTransmittanceCache&) = delete;
+    LightTransmittanceCache& operator=(const LightTransmittanceCache&) = delete;
+
+    /// The slot of the light whose direction is exactly l, −1 when there is none.
+    int slot(const Vec3& l) const {
+        for (std::size_t i = 0; i < mDirections.size(); ++i)
+            if (mDirections[i] == l) return int(i);
+        return -1;
+    }
+    const Grid& grid(int prim) const { return mGrids[std::size_t(prim)]; }
+
+    /// T at cell coordinates r (clamped to [0,1]³) of primitive `prim` (which must have a
+    /// grid), interpolated from the nodes; fill(node r) computes a missing node.
+    template <class Fill>
+    double lookup(int slot, int prim, const Vec3& r, Fill&& fill) const {
+        const Grid& g = mGrids[std::size_t(prim)];
+        std::atomic<float>* values = block(slot, prim);
+        const double gu = std::clamp(r.x(), 0.0, 1.0) * g.nu, gv = std::clamp(r.y(), 0.0, 1.0) * g.nv,
+                     gw = std::clamp(r.z(), 0.0, 1.0) * g.nw;
+        const int iu = std::min(int(gu), g.nu - 1), iv = std::min(int(gv), g.nv - 1), iw = std::min(int(gw), g.nw - 1);
+        const double f[3] = {gu - iu, gv - iv, gw - iw};
+        double out = 0;
+        for (int c = 0; c < 8; ++c) {
+            const int du = c & 1, dv = (c >> 1) & 1, dw = c >> 2;
+            const double weight = (du ? f[0] : 1 - f[0]) * (dv ? f[1] : 1 - f[1]) * (dw ? f[2] : 1 - f[2]);
+            if (!(weight > 0)) continue;  // a node that does not count is not computed
+            const std::size_t index =
+                (std::size_t(iw + dw) * std::size_t(g.nv + 1) + std::size_t(iv + dv)) * std::size_t(g.nu + 1) + std::size_t(iu + du);
+            float value = values[index].load(std::memory_order_relaxed);
+            if (std::isnan(value)) {
+                value = float(fill(Vec3(double(iu + du) / g.nu, double(iv + dv) / g.nv, double(iw + dw) / g.nw)));
+                values[index].store(value, std::memory_order_relaxed);
+            }
+            out += weight * double(value);
+        }
+        return out;
+    }
+
+private:
+    std::atomic<float>* block(int slot, int prim) const {
+        std::atomic<std::atomic<float>*>& entry = mBlocks[std::size_t(slot) * mGrids.size() + std::size_t(prim)];
+        std::atomic<float>* values = entry.load(std::memory_order_acquire);
+        if (values) return values;
+        const std::size_t n = mGrids[std::size_t(prim)].nodes();
+        auto* fresh = new std::atomic<float>[n];
+        for (std::size_t i = 0; i < n; ++i) fresh[i].store(std::numeric_limits<float>::quiet_NaN(), std::memory_order_relaxed);
+        if (entry.compare_exchange_strong(values, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) return fresh;
+        delete[] fresh;  // another thread was first
+        return values;
+    }
+
+    std::vector<Vec3> mDirections;
+    std::vector<Grid> mGrids;
+    std::unique_ptr<std::atomic<std::atomic<float>*>[]> mBlocks;
+};
+
+}  // namespace vtex::render::detail
