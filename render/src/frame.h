@@ -163,6 +163,41 @@ inline std::optional<Vec3> entryCoords(const Prim& prim, const Hit& hit, const V
     return prim.cell.inverse(o + hit.t * d, guess, 1e-7, 1e-3);
 }
 
+/// Follows a shadow ray from o along the unit direction l up to tMax through the base faces and
+/// cells: an opaque face or a cell's floor blocks it (0); in each cell it crosses, the straight
+/// reference-space segment between the cell coordinates where it enters and leaves is handed to
+/// `segment(prim, surface, rIn, rOut, startsAtHint, transmittanceSoFar)`, whose transmittance
+/// multiplies in. `startsAtHint`: the ray starts inside cell `hintPrim` at `hintR`, where a
+/// caller's surface point lies. Below `cutoff` the answer is 0.
+template <class Segment>
+double walkShadowRay(const Tracer& tracer, const std::vector<SurfaceRuntime>& surfaces, const Vec3& o, const Vec3& l,
+                     double tMax, int hintPrim, const Vec3& hintR, double cutoff, Segment&& segment) {
+    double transmittance = 1;
+    double tNear = 0;
+    SpanCache cache;
+    for (int step = 0; step < 4096; ++step) {
+        const auto hit = tracer.trace(o, l, tNear, tMax, &cache);
+        if (!hit) break;
+        const Prim& prim = tracer.prims()[std::size_t(hit->prim)];
+        if (!prim.textured) return 0;
+        const CellSpan& span = hit->span;
+        if (span.faceIn == 0 && hit->t <= span.tIn) return 0;
+        const SurfaceRuntime& surface = surfaces[std::size_t(prim.surface)];
+        const double tOut = std::min(span.tOut, tMax);
+        if (const auto rIn = entryCoords(prim, *hit, o, l, hintPrim, hintR)) {
+            const Vec3 rOut =
+                tOut < span.tOut ? prim.cell.inverse(o + tOut * l, span.rOut).value_or(span.rOut) : span.rOut;
+            const bool startsAtHint = span.faceIn < 0 && hit->prim == hintPrim;
+            transmittance *= segment(prim, surface, *rIn, rOut, startsAtHint, transmittance);
+            if (transmittance <= cutoff) return 0;
+        }
+        if (tOut < span.tOut) break;
+        if (span.faceOut == 0) return 0;  // leaves through the base surface
+        tNear = span.tOut;
+    }
+    return transmittance;
+}
+
 /// What one pixel's samples added up to.
 struct PixelValue {
     Color radiance = Color::Zero();

@@ -108,30 +108,14 @@ private:
     double visibility(const Vec3& o, const Vec3& l, double tMax, int hintPrim, const Vec3& hintR, Counters& counters) const {
         if (mDeformed) return visibilityDeformed(o, l, tMax, counters);
         ++counters.shadow;
-        double tNear = 0;
-        detail::SpanCache cache;
-        for (int step = 0; step < 4096; ++step) {
-            const auto hit = mTracer.trace(o, l, tNear, tMax, &cache);
-            if (!hit) break;
-            const Prim& prim = mTracer.prims()[std::size_t(hit->prim)];
-            if (!prim.textured) return 0;
-            const CellSpan& span = hit->span;
-            if (span.faceIn == 0 && hit->t <= span.tIn) return 0;
-            const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
-            const double tOut = std::min(span.tOut, tMax);
-            if (const auto rIn = detail::entryCoords(prim, *hit, o, l, hintPrim, hintR)) {
-                const Vec3 rOut = tOut < span.tOut ? prim.cell.inverse(o + tOut * l, span.rOut).value_or(span.rOut) : span.rOut;
-                const Vec3 p0 = tile(*rIn, surface), p1 = tile(rOut, surface);
-                const bool leavesTriangle = span.faceIn < 0 && hit->prim == hintPrim;
+        return detail::walkShadowRay(
+            mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, 0,
+            [&](const Prim&, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint, double) {
+                const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
                 const double length = (p1 - p0).norm();
-                const double sMin = leavesTriangle ? (length > 0 ? kSelfIntersectionGap / length : 1.0) : 0.0;
-                if (mSources[std::size_t(surface.texel)].bvh->occluded(p0, p1, sMin)) return 0;
-            }
-            if (tOut < span.tOut) break;
-            if (span.faceOut == 0) return 0;  // leaves through the base surface
-            tNear = span.tOut;
-        }
-        return 1;
+                const double sMin = startsAtHint ? (length > 0 ? kSelfIntersectionGap / length : 1.0) : 0.0;
+                return mSources[std::size_t(surface.texel)].bvh->occluded(p0, p1, sMin) ? 0.0 : 1.0;
+            });
     }
 
     double visibilityDeformed(const Vec3& o, const Vec3& l, double tMax, Counters& counters) const {

@@ -260,40 +260,21 @@ private:
     double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
                         Counters& counters) const {
         ++counters.shadow;
-        double transmittance = 1;
-        double tNear = 0;
-        detail::SpanCache cache;
-        for (int step = 0; step < 4096; ++step) {
-            const auto hit = mTracer.trace(o, l, tNear, tMax, &cache);
-            if (!hit) break;
-            const Prim& prim = mTracer.prims()[std::size_t(hit->prim)];
-            if (!prim.textured) return 0;
-            const CellSpan& span = hit->span;
-            if (span.faceIn == 0 && hit->t <= span.tIn) return 0;
-            const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
-            const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
-            const auto rIn = entryCoords(prim, *hit, o, l, hintPrim, hintR);
-            const double tOut = std::min(span.tOut, tMax);
-            if (rIn) {
-                const Vec3 rOut = tOut < span.tOut ? prim.cell.inverse(o + tOut * l, span.rOut).value_or(span.rOut)
-                                                   : span.rOut;
-                const Vec3 p0 = tile(*rIn, surface), p1 = tile(rOut, surface);
-                const Vec3 rMid = 0.5 * (*rIn + rOut);
-                const double scale = localScale(prim.cell, rMid, surface);
+        return detail::walkShadowRay(
+            mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, kTransmittanceCutoff,
+            [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool,
+                double transmittance) {
+                const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
+                const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
+                const double scale = localScale(prim.cell, 0.5 * (rIn + rOut), surface);
                 const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
                 const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
                 const SegmentTransmittance seg = marchTransmittance(*texel.tree, texel.tau, p0, p1, level,
                                                                     kTransmittanceCutoff / transmittance,
                                                                     &mEmptySpace[std::size_t(surface.texel)]);
                 counters.voxels += seg.blocks;
-                transmittance *= seg.transmittance;
-                if (transmittance <= kTransmittanceCutoff) return 0;
-            }
-            if (tOut < span.tOut) break;
-            if (span.faceOut == 0) return 0;  // leaves through the base surface
-            tNear = span.tOut;
-        }
-        return transmittance;
+                return seg.transmittance;
+            });
     }
 
     static Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
