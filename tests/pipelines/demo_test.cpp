@@ -54,8 +54,11 @@ TEST(Demo, RendersEveryFigureReportsThemAndIsCachedTheSecondTime) {
         if (group["truth"] != "study-truth") continue;
         studyFound = true;
         EXPECT_EQ(group["rows"].size(), 10u);
-        for (const auto& row : group["rows"])
-            if (row["renderer"] == "texel") EXPECT_TRUE(row.contains("speedup_at_equal_error")) << row.dump();
+        for (const auto& row : group["rows"]) {
+            if (row["renderer"] == "texel") {
+                EXPECT_TRUE(row.contains("speedup_at_equal_error")) << row.dump();
+            }
+        }
     }
     EXPECT_TRUE(studyFound);
     EXPECT_NE(r.out.find("error against run time"), std::string::npos) << r.out;
