@@ -222,7 +222,8 @@ TEST(Render, ExtremeScenesStayFinite) {
              return s;
          }},
         {"shell 1e3 of the face", [&] {
-             Scene s = baseScene(Eigen::Vector3d(0.5, -3000, 500), Eigen::Vector3d(0.5, 0.5, 500), 40, 32);
+             // Close enough that the 1-unit-wide, 1000-unit-high shell fills part of the view.
+             Scene s = baseScene(Eigen::Vector3d(0.5, -3, 500), Eigen::Vector3d(0.5, 0.5, 500), 40, 32);
              texelFace(s, gridMesh(0, 0, 1, 1, 0), 1e3);
              return s;
          }},
@@ -277,6 +278,9 @@ TEST(Render, ExtremeScenesStayFinite) {
         o.aovs = true;
         const RenderResult r = renderQuiet(c.make(), o);
         EXPECT_TRUE(allFinite(r.image)) << c.name;
+        double coverage = 0;
+        for (std::size_t i = 0; i < r.image.pixels(); ++i) coverage += r.image.rgba[4 * i + 3];
+        EXPECT_GT(coverage, 0) << c.name << ": every case must draw something";
         for (std::size_t i = 0; i < r.image.pixels(); ++i) {
             ASSERT_TRUE(std::isfinite(r.image.depth[i]) && std::isfinite(r.image.level[i])) << c.name;
             ASSERT_GE(r.image.rgba[4 * i + 3], 0.f) << c.name;
