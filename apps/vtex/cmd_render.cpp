@@ -15,6 +15,7 @@ struct RenderArgs : ImageCommandArgs {
     int spp = 1;
     double lodBias = 0;
     std::string shading = "fast";
+    double shadowRefresh = 0.25;
 };
 
 const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
@@ -27,6 +28,11 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         ->capture_default_str();
     app.add_option("--lod-bias", a->lodBias, "Octree level bias: +1 is one level coarser")
         ->check(CLI::Range(-32.0, 32.0))
+        ->capture_default_str();
+    app.add_option("--shadow-refresh", a->shadowRefresh,
+                   "A new shadow query once a march's transmittance falls below this fraction of the last "
+                   "query's (nearer 1: deeper voxels darker, less error, more time)")
+        ->check(CLI::Range(0.001, 1.0))
         ->capture_default_str();
     app.add_option("--shading", a->shading, "Micro-primitive reflectance: fast (SGGX visible-normal quadrature) or reference (the paper's integration)")
         ->check(CLI::IsMember({"fast", "reference"}))
@@ -41,6 +47,7 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         options.threads = a->threads;
         options.shading = a->shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
         options.aovs = a->aovs;
+        options.shadowRefresh = a->shadowRefresh;
         TerminalProgress progress(global);
         const render::RenderResult result = render::renderScene(scene, options, progress);
         writeImageOutputs(result, *a);

@@ -365,6 +365,7 @@ private:
             lightAt(mScene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
             sl.usable = referenceLight(sl.lw, sl.lr);
         }
+        const double shadowRefresh = std::clamp(mOptions.shadowRefresh, 1e-6, 1.0);
         const auto run = [&](int level, bool record) {
             Result r;
             std::array<double, 16> shadowT{};
@@ -404,10 +405,10 @@ private:
                         } else if (!lightAt(mScene.lights[i], x, lw, distance, e)) {
                             continue;
                         }
-                        // One shadow ray at the first lit voxel, another each time the local
-                        // transmittance has fallen to a quarter since: the shadow varies with
-                        // depth into the texel, not from voxel to voxel.
-                        if (!shadowValid[i] || r.transmittance < 0.25 * shadowAt[i]) {
+                        // One shadow query at the first lit voxel, another each time the local
+                        // transmittance has fallen below shadowRefresh of what it was at the
+                        // last one: the shadow varies with depth into the texel.
+                        if (!shadowValid[i] || r.transmittance < shadowRefresh * shadowAt[i]) {
                             ShadowTrack& track = tracks[i];
                             int nearest = -1;
                             if (!record) {

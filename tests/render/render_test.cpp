@@ -406,3 +406,27 @@ TEST(Render, SkippedBlendLevelsMatchTheFullBlend) {
     EXPECT_LT(skipped.stats.voxelsVisited, exact.stats.voxelsVisited);
     EXPECT_NEAR(exact.stats.meanLevel(), skipped.stats.meanLevel(), 0.05);
 }
+
+// A shadow query per absorbing voxel (shadowRefresh 1) is the limit the reuse of queries along
+// a march approximates: refreshing sooner (0.7) must come closer to it than the default (0.25),
+// with more queries.
+TEST(Render, SoonerShadowRefreshApproachesAQueryPerVoxel) {
+    Scene scene = grassPlane(48);
+    scene.lights[0].direction = Eigen::Vector3d(-0.7, 0.3, -0.6).normalized();
+    RenderOptions o;
+    o.shadowRefresh = 1.0;
+    const RenderResult perVoxel = renderQuiet(scene, o);
+    o.shadowRefresh = 0.7;
+    const RenderResult sooner = renderQuiet(scene, o);
+    o.shadowRefresh = 0.25;
+    const RenderResult usual = renderQuiet(scene, o);
+    EXPECT_EQ(usual.image.rgba, renderQuiet(scene, {}).image.rgba) << "0.25 is the default";
+    const double soonerError = rmse(sooner.image, perVoxel.image), usualError = rmse(usual.image, perVoxel.image);
+    std::cout << "shadow refresh: RMSE against a query per voxel 0.25 → " << usualError << ", 0.7 → " << soonerError
+              << "; shadow queries " << usual.stats.shadowRays << ", " << sooner.stats.shadowRays << ", "
+              << perVoxel.stats.shadowRays << "\n";
+    EXPECT_GT(usualError, 0);
+    EXPECT_LT(soonerError, usualError);
+    EXPECT_LT(usual.stats.shadowRays, sooner.stats.shadowRays);
+    EXPECT_LT(sooner.stats.shadowRays, perVoxel.stats.shadowRays);
+}

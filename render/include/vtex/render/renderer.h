@@ -51,6 +51,12 @@ struct RenderOptions {
     /// A level whose blend weight is below this is not marched, its weight going to the other
     /// level (docs/render.md, "Levels"); 0: both levels of every blend are marched (exact).
     double blendCutoff = 0.1;
+    /// Along a march, a voxel takes a new shadow query once the march's transmittance has fallen
+    /// below this fraction of what it was at the last query, and reuses the last one otherwise;
+    /// in (0, 1]. Nearer 1: deeper voxels get their own, darker shadows — less error against the
+    /// reference for more time (docs/render.md, "Shadows": on the bush terrain 0.7 lowers the RMSE
+    /// by 14–22 % at middle and far distances). 1: a query at every voxel that absorbs anything.
+    double shadowRefresh = 0.25;
 };
 
 struct RenderStats {
