@@ -10,6 +10,9 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace vtex::render::test {
 
@@ -110,6 +113,74 @@ inline void addSurface(Scene& scene, std::shared_ptr<const ingest::QuadMesh> mes
     s.height = height;
     s.repeat = repeat;
     scene.surfaces.push_back(s);
+}
+
+/// Adds a surface of `mesh` carrying a texel, `height` high, to a scene.
+using TexelFace = std::function<void(Scene&, std::shared_ptr<ingest::QuadMesh>, double height)>;
+
+/// The robustness tests' extreme scenes, `size` pixels square: a grazing camera, shells 1e-6 and
+/// 1e3 times as high as the face, a collapsed edge, a twisted patch, coordinates near 1e6,
+/// lights in the face's plane and inside the shell. `texelFace` puts the texel on.
+inline std::vector<std::pair<std::string, std::function<Scene()>>> extremeScenes(const TexelFace& texelFace, int size) {
+    return {
+        {"grazing camera", [=] {
+             Scene s = baseScene(Eigen::Vector3d(-3, 0.5, 0), Eigen::Vector3d(1, 0.5, 0), 30, size);
+             texelFace(s, gridMesh(0, 0, 1, 1, 0), 0.3);
+             addSurface(s, gridMesh(1, 0, 2, 1, 0), std::nullopt);
+             return s;
+         }},
+        {"shell 1e-6 of the face", [=] {
+             Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, size);
+             texelFace(s, gridMesh(0, 0, 1, 1, 0), 1e-6);
+             return s;
+         }},
+        {"shell 1e3 of the face", [=] {
+             // Close enough that the 1-unit-wide, 1000-unit-high shell fills part of the view.
+             Scene s = baseScene(Eigen::Vector3d(0.5, -3, 500), Eigen::Vector3d(0.5, 0.5, 500), 40, size);
+             texelFace(s, gridMesh(0, 0, 1, 1, 0), 1e3);
+             return s;
+         }},
+        {"collapsed edge", [=] {
+             Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, size);
+             auto m = quadMesh({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0.5f, 1, 0),
+                                Eigen::Vector3f(0.5f, 1, 0)},
+                               {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0, 0, 1),
+                                Eigen::Vector3f(0, 0, 1)});
+             m->quads[0] = {0, 1, 2, 2};
+             texelFace(s, m, 0.3);
+             addSurface(s, m, std::nullopt);
+             return s;
+         }},
+        {"twisted patch", [=] {
+             Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, size);
+             auto m = quadMesh({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0.8f), Eigen::Vector3f(1, 1, 0),
+                                Eigen::Vector3f(0, 1, 0.8f)},
+                               {Eigen::Vector3f(0.7f, 0, 0.7f), Eigen::Vector3f(0, 0.7f, 0.7f),
+                                Eigen::Vector3f(-0.7f, 0, 0.7f), Eigen::Vector3f(0, -0.7f, 0.7f)});
+             texelFace(s, m, 0.6);
+             return s;
+         }},
+        {"coordinates near 1e6", [=] {
+             const Eigen::Vector3d c(1e6, 1e6, 1e6);
+             Scene s = baseScene(c + Eigen::Vector3d(0.5, -2, 1.5), c + Eigen::Vector3d(0.5, 0.5, 0), 40, size);
+             texelFace(s, gridMesh(1e6, 1e6, 1e6 + 1, 1e6 + 1, 1e6, 2), 0.3);
+             return s;
+         }},
+        {"lights in the face's plane and inside the shell", [=] {
+             Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, size);
+             s.lights[0].direction = Eigen::Vector3d(1, 0, 0);
+             Light point;
+             point.type = LightType::Point;
+             point.position = Eigen::Vector3d(0.5, 0.5, 0);
+             s.lights.push_back(point);
+             Light inside = point;
+             inside.position = Eigen::Vector3d(0.5, 0.5, 0.15);
+             s.lights.push_back(inside);
+             texelFace(s, gridMesh(0, 0, 1, 1, 0), 0.3);
+             addSurface(s, gridMesh(1, 0, 2, 1, 0), std::nullopt);
+             return s;
+         }},
+    };
 }
 
 inline RenderResult renderQuiet(const Scene& scene, RenderOptions options = {}) {

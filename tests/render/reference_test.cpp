@@ -250,67 +250,9 @@ TEST(Reference, ExtremeScenesStayFinite) {
         source->positions.push_back(p);
     source->triangles.push_back({8, 9, 10});  // a sliver, nearly edge-on to the camera
     source->normals.assign(source->positions.size(), Eigen::Vector3f(0, 0, 1));
-    const auto texelFace = [&](Scene& s, std::shared_ptr<vtex::ingest::QuadMesh> m, double h) {
+    const auto cases = extremeScenes([&](Scene& s, std::shared_ptr<vtex::ingest::QuadMesh> m, double h) {
         addSurface(s, std::move(m), addSourceTexel(s, source, placementOnly(false)), h);
-    };
-    const std::vector<std::pair<const char*, std::function<Scene()>>> cases = {
-        {"grazing camera", [&] {
-             Scene s = baseScene(Eigen::Vector3d(-3, 0.5, 0), Eigen::Vector3d(1, 0.5, 0), 30, 24);
-             texelFace(s, gridMesh(0, 0, 1, 1, 0), 0.3);
-             addSurface(s, gridMesh(1, 0, 2, 1, 0), std::nullopt);
-             return s;
-         }},
-        {"shell 1e-6 of the face", [&] {
-             Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, 24);
-             texelFace(s, gridMesh(0, 0, 1, 1, 0), 1e-6);
-             return s;
-         }},
-        {"shell 1e3 of the face", [&] {
-             // Close enough that the 1-unit-wide, 1000-unit-high shell fills part of the view.
-             Scene s = baseScene(Eigen::Vector3d(0.5, -3, 500), Eigen::Vector3d(0.5, 0.5, 500), 40, 24);
-             texelFace(s, gridMesh(0, 0, 1, 1, 0), 1e3);
-             return s;
-         }},
-        {"collapsed edge", [&] {
-             Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, 24);
-             auto m = quadMesh({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0.5f, 1, 0),
-                                Eigen::Vector3f(0.5f, 1, 0)},
-                               {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0, 0, 1),
-                                Eigen::Vector3f(0, 0, 1)});
-             m->quads[0] = {0, 1, 2, 2};
-             texelFace(s, m, 0.3);
-             return s;
-         }},
-        {"twisted patch", [&] {
-             Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, 24);
-             auto m = quadMesh({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0.8f), Eigen::Vector3f(1, 1, 0),
-                                Eigen::Vector3f(0, 1, 0.8f)},
-                               {Eigen::Vector3f(0.7f, 0, 0.7f), Eigen::Vector3f(0, 0.7f, 0.7f),
-                                Eigen::Vector3f(-0.7f, 0, 0.7f), Eigen::Vector3f(0, -0.7f, 0.7f)});
-             texelFace(s, m, 0.6);
-             return s;
-         }},
-        {"coordinates near 1e6", [&] {
-             const Eigen::Vector3d c(1e6, 1e6, 1e6);
-             Scene s = baseScene(c + Eigen::Vector3d(0.5, -2, 1.5), c + Eigen::Vector3d(0.5, 0.5, 0), 40, 24);
-             texelFace(s, gridMesh(1e6, 1e6, 1e6 + 1, 1e6 + 1, 1e6, 2), 0.3);
-             return s;
-         }},
-        {"lights in the face's plane and inside the cell", [&] {
-             Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, 24);
-             s.lights[0].direction = Eigen::Vector3d(1, 0, 0);
-             Light point;
-             point.type = LightType::Point;
-             point.position = Eigen::Vector3d(0.5, 0.5, 0);
-             s.lights.push_back(point);
-             Light inside = point;
-             inside.position = Eigen::Vector3d(0.5, 0.5, 0.15);  // inside the box of the source
-             s.lights.push_back(inside);
-             texelFace(s, gridMesh(0, 0, 1, 1, 0), 0.3);
-             addSurface(s, gridMesh(1, 0, 2, 1, 0), std::nullopt);
-             return s;
-         }},
-    };
+    }, 24);
     for (const auto& [name, make] : cases)
         for (const ReferenceMode mode : {ReferenceMode::Embedded, ReferenceMode::Deformed}) {
             ReferenceOptions o;
