@@ -29,6 +29,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 
 namespace vtex::pipelines {
@@ -263,7 +264,6 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                         {"source_area", volume.info.sourceArea},
                         {"fit_error_mean", volume.info.fitError.mean}};
         };
-
     }
 
     // All samples form one wave and all builds the next, so that texels run side by side.
@@ -331,20 +331,27 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             }
             return scene;
         };
-        r.describe = [&stages, step, self, boundScene, header] {
+        r.describe = [&stages, step, self, bindings, boundScene, header] {
             std::ostringstream d;
             d << header << "render " << step.renderer << " " << step.mode << "\nsize " << step.width << "x" << step.height
               << " spp " << step.spp << " lod_bias " << step.lodBias << " shading " << step.shading << "\nscene "
               << hashFile(step.scene) << "\n";
             const render::Scene scene = boundScene();
             for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";
+            // The files of the texels the scene itself names, once each; bound texels are the
+            // pipeline's artifacts, whose hashes the inputs give below.
+            std::set<std::size_t> unbound;
             for (const auto& surface : scene.surfaces)
-                if (surface.texel)
-                    d << "texel " << *surface.texel << " " << hashFile(scene.texels[*surface.texel].volume) << "\n";
-            if (step.renderer == "reference")
-                for (const auto& surface : scene.surfaces)
-                    if (surface.texel && !scene.texels[*surface.texel].source.empty())
-                        d << "source " << *surface.texel << " " << hashFile(scene.texels[*surface.texel].source) << "\n";
+                if (surface.texel &&
+                    std::none_of(bindings.begin(), bindings.end(),
+                                 [&](const auto& b) { return b.first == scene.texels[*surface.texel].name; }))
+                    unbound.insert(*surface.texel);
+            for (std::size_t t : unbound) {
+                const render::TexelDef& texel = scene.texels[t];
+                d << "texel " << t << " " << hashFile(texel.volume);
+                if (step.renderer == "reference" && !texel.source.empty()) d << " source " << hashFile(texel.source);
+                d << "\n";
+            }
             for (std::size_t input : stages[self].inputs)
                 for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
             return d.str();
