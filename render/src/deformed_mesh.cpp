@@ -63,26 +63,38 @@ public:
         : mCell(cell), mSurface(surface), mTolerance(tolerance * cell.size()), mTriangle(sourceTriangle), mOut(out) {}
 
     void emitPolygon(const ClipPolygon& p) {
-        for (int i = 1; i + 1 < p.count; ++i) subdivide(p.v[0], p.v[std::size_t(i)], p.v[std::size_t(i + 1)], 0);
+        std::array<Corner, 16> corners;
+        for (int i = 0; i < p.count; ++i) corners[std::size_t(i)] = corner(p.v[std::size_t(i)].r, p.v[std::size_t(i)].b);
+        for (int i = 1; i + 1 < p.count; ++i) subdivide(corners[0], corners[std::size_t(i)], corners[std::size_t(i + 1)], 0);
     }
 
 private:
-    Vec3 map(const Vec3& r) const { return mCell.map(Vec3(r.x() / mSurface.repeatU, r.y() / mSurface.repeatV, r.z())); }
+    // A vertex in tiled reference space, its place in the source triangle, and its world point,
+    // mapped once however many sub-triangles share it.
+    struct Corner {
+        Vec3 r;
+        Eigen::Vector2d b;
+        Vec3 x;
+    };
 
-    void subdivide(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c, int depth) {
-        const Vec3 xa = map(a.r), xb = map(b.r), xc = map(c.r);
-        if ((xb - xa).cross(xc - xa).squaredNorm() == 0 || (b.r - a.r).cross(c.r - a.r).squaredNorm() == 0) return;
-        const ClipVertex ab{0.5 * (a.r + b.r), 0.5 * (a.b + b.b)};
-        const ClipVertex bc{0.5 * (b.r + c.r), 0.5 * (b.b + c.b)};
-        const ClipVertex ca{0.5 * (c.r + a.r), 0.5 * (c.b + a.b)};
+    Corner corner(const Vec3& r, const Eigen::Vector2d& b) const {
+        return {r, b, mCell.map(Vec3(r.x() / mSurface.repeatU, r.y() / mSurface.repeatV, r.z()))};
+    }
+    Corner midpoint(const Corner& p, const Corner& q) const { return corner(0.5 * (p.r + q.r), 0.5 * (p.b + q.b)); }
+
+    void subdivide(const Corner& a, const Corner& b, const Corner& c, int depth) {
+        if ((b.x - a.x).cross(c.x - a.x).squaredNorm() == 0 || (b.r - a.r).cross(c.r - a.r).squaredNorm() == 0) return;
+        const Corner ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+        const Corner centroid = corner((a.r + b.r + c.r) / 3, (a.b + b.b + c.b) / 3);
         // The trilinear map is quadratic along a segment at most (cubic inside): its distance to
         // the flat triangle is largest near the edge midpoints and the centroid.
-        const double error = std::max({(map(ab.r) - 0.5 * (xa + xb)).norm(), (map(bc.r) - 0.5 * (xb + xc)).norm(),
-                                       (map(ca.r) - 0.5 * (xc + xa)).norm(),
-                                       (map((a.r + b.r + c.r) / 3) - (xa + xb + xc) / 3).norm()});
+        const double error = std::max({(ab.x - 0.5 * (a.x + b.x)).norm(), (bc.x - 0.5 * (b.x + c.x)).norm(),
+                                       (ca.x - 0.5 * (c.x + a.x)).norm(), (centroid.x - (a.x + b.x + c.x) / 3).norm()});
         if (error <= mTolerance || depth >= kMaxSubdivision || !std::isfinite(error)) {
-            for (const Vec3* x : {&xa, &xb, &xc}) mOut.vertices.push_back(x->cast<float>());
-            for (const ClipVertex* v : {&a, &b, &c}) mOut.barycentric.push_back(v->b.cast<float>());
+            for (const Corner* v : {&a, &b, &c}) {
+                mOut.vertices.push_back(v->x.cast<float>());
+                mOut.barycentric.push_back(v->b.cast<float>());
+            }
             mOut.sourceTriangle.push_back(mTriangle);
             return;
         }
