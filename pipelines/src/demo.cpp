@@ -7,7 +7,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <functional>
 #include <numbers>
@@ -226,11 +225,9 @@ std::string formatDemoReport(const RunReport& report) {
                       metrics.value("rmse", 0.0));
         out << line;
     }
-    // The study's table, as report.json has it.
-    try {
-        std::ifstream in(report.reportJson);
-        const Json json = Json::parse(in);
-        for (const Json& group : json.at("error_against_time")) {
+    // The study's table, as the report has it.
+    if (!report.errorAgainstTimeJson.empty()) {
+        for (const Json& group : Json::parse(report.errorAgainstTimeJson)) {
             if (group.value("truth", "") != "study-truth") continue;
             std::snprintf(line, sizeof line, "\n  error against run time (the forest, against a %d-spp reference of %.1f s)\n",
                           renders.count("study-truth") ? renders["study-truth"].value("spp", 0) : 0,
@@ -249,8 +246,6 @@ std::string formatDemoReport(const RunReport& report) {
                 out << line;
             }
         }
-    } catch (const std::exception&) {
-        out << "  (report.json unreadable: no error-against-run-time table)\n";
     }
     for (const auto& o : report.leftOut) out << "  left out: " << o.texel << ": " << o.reason << "\n";
     for (const auto& s : report.stages)

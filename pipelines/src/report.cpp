@@ -198,6 +198,7 @@ std::string errorTimePlot(const Json& group) {
 
 void writeReports(const Pipeline& pipeline, RunReport& report) {
     const Json errorTable = errorAgainstTime(pipeline, report);
+    report.errorAgainstTimeJson = errorTable.dump();
     Json stages = Json::array();
     for (const StageRecord& s : report.stages) {
         Json outputs = Json::array();

@@ -134,6 +134,8 @@ struct RunReport {
     std::vector<Omission> leftOut;
     double seconds = 0;
     std::filesystem::path reportJson, reportHtml;
+    /// The error-against-run-time tables as report.json has them under `error_against_time`.
+    std::string errorAgainstTimeJson;
     bool succeeded() const;
 };
 
