@@ -193,9 +193,9 @@ DeformedMesh::DeformedMesh(const std::vector<Prim>& prims, const std::vector<Sur
 
     RTCDevice device = rtcNewDevice(nullptr);
     if (!device) throw std::runtime_error("Embree: cannot create a device");
-    mDevice = {device, [](void* p) { rtcReleaseDevice(static_cast<RTCDevice>(p)); }};
+    mDevice = ownDevice(device);
     RTCScene scene = rtcNewScene(device);
-    mScene = {scene, [](void* p) { rtcReleaseScene(static_cast<RTCScene>(p)); }};
+    mScene = ownScene(scene);
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
     if (count > 0) {
         RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);

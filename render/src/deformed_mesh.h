@@ -3,12 +3,12 @@
 // triangle to a tolerance, in one world-space Embree BVH. Embree types stay in the .cpp.
 #pragma once
 
+#include "embree_handle.h"
 #include "frame.h"
 #include "source_bvh.h"
 
 #include <cstdint>
 #include <filesystem>
-#include <memory>
 #include <optional>
 #include <vector>
 
@@ -54,9 +54,8 @@ private:
     std::vector<std::uint32_t> mTexel;
     std::vector<Eigen::Vector2f> mBarycentric;  ///< 3 per triangle: (b1, b2) in the source triangle
     double mLengthScale = 1;
-    // Released even when the constructor throws half-way; the scene (declared last) first.
-    std::unique_ptr<void, void (*)(void*)> mDevice{nullptr, nullptr};
-    std::unique_ptr<void, void (*)(void*)> mScene{nullptr, nullptr};
+    EmbreeHandle mDevice{nullptr, nullptr};
+    EmbreeHandle mScene{nullptr, nullptr};
 };
 
 }  // namespace vtex::render::detail

@@ -1,8 +1,10 @@
-// An Embree 3 ray from a double-precision one: what every rtcIntersect1 / rtcOccluded1 call of
-// the reference renderer starts from.
+// An Embree 3 ray from a double-precision one, what every rtcIntersect1 / rtcOccluded1 call of
+// the reference renderer starts from; and the owning handles of its devices and scenes.
 #pragma once
 
 #include <vtex/render/geometry.h>
+
+#include "embree_handle.h"
 
 #include <embree3/rtcore.h>
 
@@ -34,6 +36,14 @@ inline RTCRayHit embreeRayHit(const Vec3& origin, const Vec3& direction, double 
     rayhit.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     return rayhit;
+}
+
+inline EmbreeHandle ownDevice(RTCDevice device) {
+    return {device, [](void* p) { rtcReleaseDevice(static_cast<RTCDevice>(p)); }};
+}
+
+inline EmbreeHandle ownScene(RTCScene scene) {
+    return {scene, [](void* p) { rtcReleaseScene(static_cast<RTCScene>(p)); }};
 }
 
 }  // namespace vtex::render::detail

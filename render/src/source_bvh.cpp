@@ -42,8 +42,9 @@ SourceBvh::SourceBvh(const ingest::TriangleMesh& mesh, const octree::VolumeInfo&
 
     RTCDevice device = rtcNewDevice(nullptr);
     if (!device) throw std::runtime_error("Embree: cannot create a device");
-    mDevice = device;
+    mDevice = ownDevice(device);
     RTCScene meshScene = rtcNewScene(device);
+    mMeshScene = ownScene(meshScene);
     rtcSetSceneFlags(meshScene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(meshScene, RTC_BUILD_QUALITY_HIGH);
     if (!mesh.triangles.empty()) {
@@ -54,7 +55,6 @@ SourceBvh::SourceBvh(const ingest::TriangleMesh& mesh, const octree::VolumeInfo&
                                                                             3 * sizeof(std::uint32_t), mesh.triangles.size()));
         if (!vertices || !indices) {
             rtcReleaseGeometry(geometry);
-            rtcReleaseScene(meshScene);
             throw std::runtime_error("Embree: cannot allocate the source mesh");
         }
         for (std::size_t i = 0; i < mPositions.size(); ++i)
@@ -66,10 +66,10 @@ SourceBvh::SourceBvh(const ingest::TriangleMesh& mesh, const octree::VolumeInfo&
         rtcReleaseGeometry(geometry);
     }
     rtcCommitScene(meshScene);
-    mMeshScene = meshScene;
-    mTopScene = meshScene;
+    mTraced = meshScene;
     if (mCyclic && (mShiftMin != std::array<int, 2>{0, 0} || mShiftMax != std::array<int, 2>{0, 0})) {
         RTCScene top = rtcNewScene(device);
+        mInstances = ownScene(top);
         for (int sy = mShiftMin[1]; sy <= mShiftMax[1]; ++sy)
             for (int sx = mShiftMin[0]; sx <= mShiftMax[0]; ++sx) {
                 RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
@@ -81,21 +81,12 @@ SourceBvh::SourceBvh(const ingest::TriangleMesh& mesh, const octree::VolumeInfo&
                 rtcReleaseGeometry(instance);
             }
         rtcCommitScene(top);
-        mTopScene = top;
+        mTraced = top;
     }
-    if (rtcGetDeviceError(device) != RTC_ERROR_NONE) {
-        if (mTopScene != mMeshScene) rtcReleaseScene(static_cast<RTCScene>(mTopScene));
-        rtcReleaseScene(meshScene);
-        rtcReleaseDevice(device);
-        throw std::runtime_error("Embree: cannot build the source mesh's BVH");
-    }
+    if (rtcGetDeviceError(device) != RTC_ERROR_NONE) throw std::runtime_error("Embree: cannot build the source mesh's BVH");
 }
 
-SourceBvh::~SourceBvh() {
-    if (mTopScene != mMeshScene) rtcReleaseScene(static_cast<RTCScene>(mTopScene));
-    rtcReleaseScene(static_cast<RTCScene>(mMeshScene));
-    rtcReleaseDevice(static_cast<RTCDevice>(mDevice));
-}
+SourceBvh::~SourceBvh() = default;
 
 // Calls visit(origin, tMin, tMax) for the pieces of the segment inside each copy of the unit
 // square, in order along it, with the origin moved into that copy; stops when visit returns true.
@@ -139,7 +130,7 @@ std::optional<SourceHit> SourceBvh::intersect(const Vec3& p0, const Vec3& p1, do
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         RTCRayHit rayhit = embreeRayHit(origin, delta, s0, s1);
-        rtcIntersect1(static_cast<RTCScene>(mTopScene), &context, &rayhit);
+        rtcIntersect1(static_cast<RTCScene>(mTraced), &context, &rayhit);
         if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
         const std::uint32_t t = rayhit.hit.primID;
         const auto corners = triangle(t);
@@ -162,7 +153,7 @@ bool SourceBvh::occluded(const Vec3& p0, const Vec3& p1, double sMin) const {
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
         RTCRay ray = embreeRay(origin, delta, s0, s1);
-        rtcOccluded1(static_cast<RTCScene>(mTopScene), &context, &ray);
+        rtcOccluded1(static_cast<RTCScene>(mTraced), &context, &ray);
         return ray.tfar < 0;  // Embree marks an occluded ray with tfar = −∞
     });
 }

@@ -7,6 +7,8 @@
 #include <vtex/render/geometry.h>
 #include <vtex/render/scene.h>
 
+#include "embree_handle.h"
+
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -56,9 +58,10 @@ private:
     std::vector<Vec3> mPositions;  ///< reference space, double
     bool mCyclic = false;
     std::array<int, 2> mShiftMin{0, 0}, mShiftMax{0, 0};
-    void* mDevice = nullptr;
-    void* mMeshScene = nullptr;  ///< the triangles
-    void* mTopScene = nullptr;   ///< the shifted instances (cyclic), else the same as mMeshScene
+    EmbreeHandle mDevice{nullptr, nullptr};
+    EmbreeHandle mMeshScene{nullptr, nullptr};  ///< the triangles
+    EmbreeHandle mInstances{nullptr, nullptr};  ///< the shifted copies of a cyclic mesh, if any
+    void* mTraced = nullptr;                    ///< mInstances when there are any, else mMeshScene
 };
 
 /// Uniform pseudo-random numbers for the reference renderer's jittered samples: a pure
