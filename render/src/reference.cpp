@@ -33,6 +33,19 @@ using detail::SurfaceRuntime;
 // source BVH, far below any feature the sampler can resolve.
 constexpr double kSelfIntersectionGap = 1e-5;
 
+/// Uniform pseudo-random numbers for the reference renderer's jittered samples: a pure
+/// function of (pixel, sample, dimension), so images do not depend on the thread count.
+double hashUniform(std::uint64_t pixel, std::uint64_t sample, std::uint64_t dimension) {
+    std::uint64_t x = pixel * 0x9E3779B97F4A7C15ull ^ (sample + 0x632BE59BD9B4E019ull) * 0xD1B54A32D192ED03ull ^
+                      (dimension + 1) * 0x94D049BB133111EBull;
+    x ^= x >> 30;
+    x *= 0xBF58476D1CE4E5B9ull;
+    x ^= x >> 27;
+    x *= 0x94D049BB133111EBull;
+    x ^= x >> 31;
+    return double(x >> 11) * 0x1.0p-53;
+}
+
 struct SourceRuntime {
     std::shared_ptr<const ingest::TriangleMesh> mesh;
     std::unique_ptr<detail::SourceBvh> bvh;
@@ -229,8 +242,8 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
         const std::uint64_t pixel = std::uint64_t(y) * std::uint64_t(width) + std::uint64_t(x);
         for (int k = 0; k < samples; ++k) {
             const int sx = k % strata, sy = k / strata;
-            const double px = (x + (sx + detail::hashUniform(pixel, std::uint64_t(k), 0)) / strata) / width;
-            const double py = (y + (sy + detail::hashUniform(pixel, std::uint64_t(k), 1)) / strata) / height;
+            const double px = (x + (sx + hashUniform(pixel, std::uint64_t(k), 0)) / strata) / width;
+            const double py = (y + (sy + hashUniform(pixel, std::uint64_t(k), 1)) / strata) / height;
             const Sample s = integrator.radiance(camera.origin(), camera.direction(px, py), counters);
             value.radiance += s.radiance;
             if (s.hit) {

@@ -64,17 +64,4 @@ private:
     void* mTraced = nullptr;                    ///< mInstances when there are any, else mMeshScene
 };
 
-/// Uniform pseudo-random numbers for the reference renderer's jittered samples: a pure
-/// function of (pixel, sample, dimension), so images do not depend on the thread count.
-inline double hashUniform(std::uint64_t pixel, std::uint64_t sample, std::uint64_t dimension) {
-    std::uint64_t x = pixel * 0x9E3779B97F4A7C15ull ^ (sample + 0x632BE59BD9B4E019ull) * 0xD1B54A32D192ED03ull ^
-                      (dimension + 1) * 0x94D049BB133111EBull;
-    x ^= x >> 30;
-    x *= 0xBF58476D1CE4E5B9ull;
-    x ^= x >> 27;
-    x *= 0x94D049BB133111EBull;
-    x ^= x >> 31;
-    return double(x >> 11) * 0x1.0p-53;
-}
-
 }  // namespace vtex::render::detail
