@@ -61,7 +61,7 @@ constexpr double kShadowConeScale = 2.0;
 constexpr double kExactLatticeSteps = 2.0;
 
 struct TexelRuntime {
-    std::shared_ptr<const octree::Octree> tree;
+    std::unique_ptr<const MarchVolume> volume;
     int maxLevel = 0;
     double tau = 1;
     Material material;
@@ -202,8 +202,7 @@ private:
         const double scale = localScale(prim.cell, r, surface);
         const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
         const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
-        const SegmentTransmittance near = marchTransmittance(*texel.tree, texel.tau, p0, p1, level, kTransmittanceCutoff,
-                                                             &mEmptySpace[std::size_t(surface.texel)]);
+        const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tau, p0, p1, level, kTransmittanceCutoff);
         counters.voxels += near.blocks;
         if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
         const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
@@ -269,9 +268,8 @@ private:
                 const double scale = localScale(prim.cell, 0.5 * (rIn + rOut), surface);
                 const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
                 const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
-                const SegmentTransmittance seg = marchTransmittance(*texel.tree, texel.tau, p0, p1, level,
-                                                                    kTransmittanceCutoff / transmittance,
-                                                                    &mEmptySpace[std::size_t(surface.texel)]);
+                const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tau, p0, p1, level,
+                                                                    kTransmittanceCutoff / transmittance);
                 counters.voxels += seg.blocks;
                 return seg.transmittance;
             });
@@ -372,18 +370,17 @@ private:
             std::array<double, 16> shadowAt{};  // local transmittance when the shadow was taken
             std::array<bool, 16> shadowValid{};
             std::array<int, 16> reuseAt{};      // reuse: index of the track's current ray
-            counters.voxels += detail::marchBlocks(*texel.tree, level, p0, dir, length,
-                [&](const octree::OctreeNode& node, double s, double ds) {
-                    const auto& data = node.data;
-                    const SggxMatrix sMatrix = voxelS(data);
-                    const double sigma = texel.tau * double(data.density) * detail::normalizedArea(sMatrix, dir);
+            counters.voxels += detail::march(*texel.volume, level, p0, dir, length,
+                [&](const GridVoxel& voxel, double s, double ds) {
+                    const SggxMatrix& sMatrix = voxel.s;
+                    const double sigma = texel.tau * double(voxel.density) * detail::normalizedArea(sMatrix, dir);
                     const double alpha = -std::expm1(-sigma * ds);
                     if (!(alpha > 0)) return true;
                     const double sm = s + 0.5 * ds;
                     const Vec3 pt = p0 + sm * dir;
                     const Vec3 rc(pt.x() / surface.repeatU, pt.y() / surface.repeatV, pt.z());
                     const double tWorld = tIn + (tOut - tIn) * (sm / length);
-                    const Color albedo(data.albedo[0], data.albedo[1], data.albedo[2]);
+                    const Color albedo(voxel.albedo[0], voxel.albedo[1], voxel.albedo[2]);
                     Color lk = m.ambient.cwiseProduct(albedo);
                     // The world point: for point lights, and for shadow rays.
                     Vec3 x = Vec3::Zero();
@@ -447,7 +444,7 @@ private:
                     r.radiance += r.transmittance * alpha * lk;
                     r.transmittance *= 1 - alpha;
                     return startT * r.transmittance > kTransmittanceCutoff;
-                }, mEmptySpace[std::size_t(surface.texel)].level(level));
+                });
             return r;
         };
         Result result;
@@ -478,16 +475,6 @@ private:
     const std::vector<TexelRuntime>& mTexels;
     double mConeSpread;
     detail::LightTransmittanceCache mLightCache = makeLightCache();
-    std::vector<EmptySpace> mEmptySpace = makeEmptySpace();
-
-    // Empty-space distances of each texel's octree (texel_march.h), for the marches to leap over
-    // runs of empty voxels; same images, fewer empty steps.
-    std::vector<EmptySpace> makeEmptySpace() const {
-        std::vector<EmptySpace> out(mTexels.size());
-        for (std::size_t i = 0; i < mTexels.size(); ++i)
-            if (mTexels[i].tree) out[i] = emptySpace(*mTexels[i].tree);
-        return out;
-    }
 };
 
 }  // namespace
@@ -504,12 +491,13 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
     for (const SurfaceDef& s : scene.surfaces) {
         if (!s.texel) continue;
         TexelRuntime& t = texels[*s.texel];
-        if (t.tree) continue;
+        if (t.volume) continue;
         const TexelDef& def = scene.texels[*s.texel];
-        t.tree = def.octree ? def.octree : std::make_shared<const octree::Octree>(octree::readVto(def.volume));
-        if (t.tree->levels.empty() || t.tree->levels[0].empty())
+        auto tree = def.octree ? def.octree : std::make_shared<const octree::Octree>(octree::readVto(def.volume));
+        if (tree->levels.empty() || tree->levels[0].empty())
             throw InputError(def.volume, "octree has no root");
-        t.maxLevel = int(t.tree->levels.size()) - 1;
+        t.volume = std::make_unique<const MarchVolume>(std::move(tree));
+        t.maxLevel = t.volume->maxLevel();
         t.tau = def.tau;
         t.material = def.material;
     }

@@ -80,12 +80,16 @@ TEST(Render, ConstantDensityTransmittance) {
     const float rho = 0.65f;
     const double tau = 2.0;
     const auto tree = constantOctree(3, rho);
-    // Directly, at every level, along and across the cell.
-    for (int level = 0; level <= 3; ++level) {
-        const auto t = marchTransmittance(*tree, tau, Eigen::Vector3d(0.3, 0.4, 0), Eigen::Vector3d(0.3, 0.4, 1), level);
-        EXPECT_NEAR(t.transmittance, std::exp(-tau * rho), 1e-3) << level;
-        const auto diag = marchTransmittance(*tree, tau, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1.7, 0.9, 1), level);
-        EXPECT_NEAR(diag.transmittance, std::exp(-tau * rho * std::sqrt(1.7 * 1.7 + 0.81 + 1)), 1e-3) << level;
+    // Directly, at every level, along and across the cell, through the dense grids and through
+    // the octree's blocks.
+    for (const int maxGridLevel : {MarchVolume::kDefaultMaxGridLevel, -1}) {
+        const MarchVolume volume(tree, maxGridLevel);
+        for (int level = 0; level <= 3; ++level) {
+            const auto t = marchTransmittance(volume, tau, Eigen::Vector3d(0.3, 0.4, 0), Eigen::Vector3d(0.3, 0.4, 1), level);
+            EXPECT_NEAR(t.transmittance, std::exp(-tau * rho), 1e-3) << level;
+            const auto diag = marchTransmittance(volume, tau, Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1.7, 0.9, 1), level);
+            EXPECT_NEAR(diag.transmittance, std::exp(-tau * rho * std::sqrt(1.7 * 1.7 + 0.81 + 1)), 1e-3) << level;
+        }
     }
     // Through the renderer: a unit cell seen head-on through its side (the ray crosses u from 0
     // to 1 at v = w = ½, reference length 1), coverage alpha = 1 − T.

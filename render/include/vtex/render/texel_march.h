@@ -4,17 +4,20 @@
 ///
 /// Reference space is the unit cube of the texel (x, y across, z up), tiled `repeat` times along
 /// x and y inside a cell; a level ℓ has 2^ℓ voxels per side. A stored node with no children
-/// stands for all its missing descendants, and a cleared child bit for an empty block, so the
-/// march steps over whole blocks (an Amanatides–Woo traversal at the block's size, in double
-/// precision). Extinction along the unit reference direction ω is σₜ(ω) = τ ρ Â(ω),
+/// stands for all its missing descendants, and a cleared child bit for an empty block. A march
+/// walks a level voxel by voxel (Amanatides–Woo, double precision) through a dense grid of that
+/// level (MarchVolume), leaping over empty space. Extinction along the unit reference direction ω is σₜ(ω) = τ ρ Â(ω),
 /// Â(ω) = √(ωᵀSω) for the normalised S a node stores (DESIGN.md, "The micro-primitive").
 #pragma once
 
 #include <vtex/octree/octree.h>
+#include <vtex/render/shading.h>
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace vtex::render {
@@ -37,28 +40,61 @@ struct SegmentTransmittance {
     std::uint64_t blocks = 0;  ///< octree blocks stepped through
 };
 
-/// Empty-space distances of an octree, for the march to leap over runs of empty voxels: for each
-/// level ℓ ≤ kMaxLevel (and ≤ the octree's deepest), 2^ℓ·2^ℓ·2^ℓ bytes, index (z·2^ℓ + y)·2^ℓ + x,
-/// each the Chebyshev distance in voxels of that level from the voxel to the nearest non-empty
-/// one (x and y periodic, as the texel tiles), capped at kCap: 0 for a non-empty voxel, d ≥ 1
-/// when the (2d−1)³ voxels centred on it are all empty. A march that uses them visits the same
-/// non-empty blocks over the same intervals, and steps through fewer empty ones.
-struct EmptySpace {
-    static constexpr int kMaxLevel = 6;
-    static constexpr int kCap = 16;
-    std::vector<std::vector<std::uint8_t>> levels;
-    const std::uint8_t* level(int l) const {
-        return l >= 0 && std::size_t(l) < levels.size() && !levels[std::size_t(l)].empty() ? levels[std::size_t(l)].data() : nullptr;
-    }
+/// One voxel's data as a march reads it: the octree node's, with S unpacked once (voxelS, kept
+/// in double precision: the same values as unpacking it at every visit) so that a march does not
+/// rebuild it from the quaternion at every visit. 64 bytes, a cache line.
+struct GridVoxel {
+    SggxMatrix s;
+    float density = 0;  ///< ρ; 0 only for the empty sentinel
+    std::array<float, 3> albedo{};
 };
-EmptySpace emptySpace(const octree::Octree& octree);
+GridVoxel gridVoxel(const octree::VoxelData& data);
+
+/// Level ℓ of a texel as a dense grid, for marching it with a plain voxel walk instead of
+/// descending the octree at every step: 2^ℓ·2^ℓ·2^ℓ voxel indices (index (z·2^ℓ + y)·2^ℓ + x)
+/// into `voxels`, one entry per stored node that stands for voxels of level ℓ (itself, or a
+/// leaf above), voxels[0] being the empty sentinel; and the empty-space distances of the level:
+/// the Chebyshev distance in voxels from each voxel to the nearest non-empty one (x and y
+/// periodic, as the texel tiles), capped at kCap: 0 for a non-empty voxel, d ≥ 1 when the
+/// (2d−1)³ voxels centred on it are all empty.
+struct LevelGrid {
+    static constexpr int kCap = 16;
+    int level = 0;
+    std::uint32_t n = 1;
+    std::vector<std::uint32_t> cells;
+    std::vector<GridVoxel> voxels;
+    std::vector<std::uint8_t> distance;
+};
+
+/// A texel's octree prepared for marching. Levels up to `maxGridLevel` are marched as dense
+/// LevelGrids, each built the first time a march asks for it (thread-safe; a render builds only
+/// the levels its rays use); deeper levels, whose grids would be too large (8^ℓ cells), are
+/// marched through the octree itself, block by block. Both walks visit the same voxels.
+class MarchVolume {
+public:
+    static constexpr int kDefaultMaxGridLevel = 8;  ///< 64 MiB of cells at 256³
+    explicit MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGridLevel = kDefaultMaxGridLevel);
+    ~MarchVolume();
+    MarchVolume(const MarchVolume&) = delete;
+    MarchVolume& operator=(const MarchVolume&) = delete;
+
+    const octree::Octree& tree() const { return *mTree; }
+    int maxLevel() const { return mMaxLevel; }
+    /// Level ℓ's grid (built now if need be), or null beyond maxGridLevel or the octree's depth.
+    const LevelGrid* grid(int level) const;
+
+private:
+    struct Slot;
+    std::shared_ptr<const octree::Octree> mTree;
+    int mMaxLevel = -1;
+    int mMaxGridLevel = 0;
+    std::unique_ptr<Slot[]> mSlots;
+};
 
 /// exp(−∫ τ ρ Â(ω) dL) along the straight reference-space segment from `from` to `to` (x and y
-/// wrap modulo 1, z is clamped to [0,1]) through `octree` at `level` (clamped to its deepest).
-/// Stops early once the transmittance is below `cutoff`. `empty`, if given, must be
-/// emptySpace(octree): the same answer, faster.
-SegmentTransmittance marchTransmittance(const octree::Octree& octree, double tau, const Eigen::Vector3d& from,
-                                        const Eigen::Vector3d& to, int level, double cutoff = 0,
-                                        const EmptySpace* empty = nullptr);
+/// wrap modulo 1, z is clamped to [0,1]) through `volume` at `level` (clamped to its deepest).
+/// Stops early once the transmittance is below `cutoff`.
+SegmentTransmittance marchTransmittance(const MarchVolume& volume, double tau, const Eigen::Vector3d& from,
+                                        const Eigen::Vector3d& to, int level, double cutoff = 0);
 
 }  // namespace vtex::render
