@@ -33,15 +33,16 @@ GridVoxel gridVoxel(const octree::VoxelData& data) {
 
 namespace {
 
-// Writes into grid.cells the voxel index of every voxel of grid.level under `node` (at `level`,
-// coordinates x, y, z there), adding the voxels of the nodes that stand for them.
-void fillCells(const octree::Octree& tree, const octree::OctreeNode& node, int level, std::uint32_t x, std::uint32_t y,
-               std::uint32_t z, LevelGrid& grid) {
+// Sets the voxel index (1 + position in grid.voxels) of every voxel of grid.level under `node`
+// (at `level`, coordinates x, y, z there) in `index` (row-major), adding the voxels of the nodes
+// that stand for them.
+void fillIndex(const octree::Octree& tree, const octree::OctreeNode& node, int level, std::uint32_t x, std::uint32_t y,
+               std::uint32_t z, LevelGrid& grid, std::vector<std::uint32_t>& index) {
     if (level < grid.level && !node.isLeaf()) {
         for (unsigned c = 0, stored = 0; c < 8; ++c) {
             if (!(node.childMask & (1u << c))) continue;
-            fillCells(tree, tree.levels[std::size_t(level + 1)][node.firstChild + stored++], level + 1,
-                      2 * x + (c & 1u), 2 * y + ((c >> 1) & 1u), 2 * z + ((c >> 2) & 1u), grid);
+            fillIndex(tree, tree.levels[std::size_t(level + 1)][node.firstChild + stored++], level + 1,
+                      2 * x + (c & 1u), 2 * y + ((c >> 1) & 1u), 2 * z + ((c >> 2) & 1u), grid, index);
         }
         return;
     }
@@ -53,28 +54,26 @@ void fillCells(const octree::Octree& tree, const octree::OctreeNode& node, int l
     const std::size_t n = grid.n;
     for (std::uint32_t k = z << shift; k < (z + 1) << shift; ++k)
         for (std::uint32_t j = y << shift; j < (y + 1) << shift; ++j) {
-            std::uint32_t* row = &grid.cells[(std::size_t(k) * n + j) * n + (std::size_t(x) << shift)];
+            std::uint32_t* row = &index[(std::size_t(k) * n + j) * n + (std::size_t(x) << shift)];
             std::fill(row, row + size, voxel);
         }
 }
 
-// The Chebyshev distances of a level, exactly. The L∞ distance is separable: along x, then the
-// max-min along y, then along z, each a search outward that stops once the offset reaches the
-// best distance found (x and y wrap, z does not).
-void exactDistances(LevelGrid& grid) {
-    const int n = int(grid.n);
+// The Chebyshev distances of a level (row-major, from its row-major voxel index), exactly. The
+// L∞ distance is separable: along x, then the max-min along y, then along z, each a search
+// outward that stops once the offset reaches the best distance found (x and y wrap, z does not).
+std::vector<std::uint8_t> exactDistances(const std::vector<std::uint32_t>& index, int n) {
     constexpr int kFar = LevelGrid::kCap;
     const auto at = [n](int x, int y, int z) { return (std::size_t(z) * std::size_t(n) + std::size_t(y)) * std::size_t(n) + std::size_t(x); };
-    std::vector<std::uint8_t>& d = grid.distance;
-    d.assign(grid.cells.size(), std::uint8_t(kFar));
+    std::vector<std::uint8_t> d(index.size(), std::uint8_t(kFar));
     for (std::size_t i = 0; i < d.size(); ++i)
-        if (grid.cells[i]) d[i] = 0;
+        if (index[i]) d[i] = 0;
     std::vector<std::uint8_t> line(static_cast<std::size_t>(n));
     const auto pass = [&](int axis) {
         for (int a = 0; a < n; ++a)
             for (int b = 0; b < n; ++b) {
-                const auto index = [&](int i) { return axis == 0 ? at(i, a, b) : axis == 1 ? at(a, i, b) : at(a, b, i); };
-                for (int i = 0; i < n; ++i) line[std::size_t(i)] = d[index(i)];
+                const auto lineIndex = [&](int i) { return axis == 0 ? at(i, a, b) : axis == 1 ? at(a, i, b) : at(a, b, i); };
+                for (int i = 0; i < n; ++i) line[std::size_t(i)] = d[lineIndex(i)];
                 for (int i = 0; i < n; ++i) {
                     int best = line[std::size_t(i)];
                     for (int k = 1; k < best && k < n; ++k) {
@@ -85,33 +84,20 @@ void exactDistances(LevelGrid& grid) {
                             best = std::min(best, std::max(k, int(line[std::size_t(w)])));
                         }
                     }
-                    d[index(i)] = std::uint8_t(std::min(best, kFar));
+                    d[lineIndex(i)] = std::uint8_t(std::min(best, kFar));
                 }
             }
     };
     pass(0);
     pass(1);
     pass(2);
-}
-
-// Lower bounds of a level's distances from its parent level's, for levels where the exact search
-// costs too much: around an empty parent at distance D, the empty parents span at least
-// 2(D − 1) child voxels on every side of any child inside it, so the child's distance is at
-// least 2D − 1. A smaller distance only means a shorter leap.
-void distancesFromParent(LevelGrid& grid, const LevelGrid& parent) {
-    const std::size_t n = grid.n, pn = parent.n;
-    grid.distance.resize(grid.cells.size());
-    for (std::size_t z = 0; z < n; ++z)
-        for (std::size_t y = 0; y < n; ++y)
-            for (std::size_t x = 0; x < n; ++x) {
-                const std::size_t i = (z * n + y) * n + x;
-                const int d = parent.distance[((z / 2) * pn + y / 2) * pn + x / 2];
-                grid.distance[i] = grid.cells[i] ? 0 : std::uint8_t(d == 0 ? 1 : std::min(2 * d - 1, LevelGrid::kCap));
-            }
+    return d;
 }
 
 // Exact distances up to this level (64³: the search's cost grows with the level's 8^ℓ voxels and
-// the cap), bounds from the parent beyond.
+// the cap). Beyond it, lower bounds from the parent level's: around an empty parent at distance
+// D, the empty parents span at least 2(D − 1) child voxels on every side of any child inside it,
+// so the child's distance is at least 2D − 1 (a smaller distance only means a shorter leap).
 constexpr int kExactDistanceLevel = 6;
 
 }  // namespace
@@ -123,7 +109,7 @@ struct MarchVolume::Slot {
 
 MarchVolume::MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGridLevel) : mTree(std::move(tree)) {
     if (mTree && !mTree->levels.empty() && !mTree->levels[0].empty()) mMaxLevel = std::min(int(mTree->levels.size()) - 1, 30);
-    mMaxGridLevel = std::clamp(maxGridLevel, -1, std::min(mMaxLevel, 10));
+    mMaxGridLevel = std::clamp(maxGridLevel, -1, std::min(mMaxLevel, LevelGrid::kMaxLevel));
     if (mMaxGridLevel >= 0) mSlots = std::make_unique<Slot[]>(std::size_t(mMaxGridLevel + 1));
 }
 
@@ -135,12 +121,28 @@ const LevelGrid* MarchVolume::grid(int level) const {
     std::call_once(slot.once, [&] {
         auto grid = std::make_unique<LevelGrid>();
         grid->level = level;
-        grid->n = 1u << level;
-        grid->cells.assign(std::size_t(grid->n) * grid->n * grid->n, 0);
-        grid->voxels.emplace_back();  // the empty sentinel
-        fillCells(*mTree, mTree->levels[0][0], 0, 0, 0, 0, *grid);
-        if (level <= kExactDistanceLevel) exactDistances(*grid);
-        else distancesFromParent(*grid, *this->grid(level - 1));
+        const std::uint32_t n = grid->n = 1u << level;
+        grid->voxels.emplace_back();  // index 0: empty
+        std::vector<std::uint32_t> index(std::size_t(n) * n * n, 0);
+        fillIndex(*mTree, mTree->levels[0][0], 0, 0, 0, 0, *grid, index);
+        std::vector<std::uint8_t> distance;
+        if (level <= kExactDistanceLevel) distance = exactDistances(index, int(n));
+        grid->cells.resize(index.size());
+        const LevelGrid* parent = level > kExactDistanceLevel ? this->grid(level - 1) : nullptr;
+        for (std::uint32_t z = 0, i = 0; z < n; ++z)
+            for (std::uint32_t y = 0; y < n; ++y)
+                for (std::uint32_t x = 0; x < n; ++x, ++i) {
+                    std::uint32_t d = 0;
+                    if (!index[i]) {
+                        if (parent) {
+                            const int dp = parent->distance(x / 2, y / 2, z / 2);
+                            d = std::uint32_t(dp == 0 ? 1 : std::min(2 * dp - 1, LevelGrid::kCap));
+                        } else {
+                            d = distance[i];
+                        }
+                    }
+                    grid->cells[LevelGrid::morton(x, y, z)] = index[i] ? index[i] : LevelGrid::kEmpty | d;
+                }
         slot.grid = std::move(grid);
     });
     return slot.grid.get();

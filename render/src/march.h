@@ -194,9 +194,8 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
     double s = 0;
     while (s < length && steps < maxSteps) {
         ++steps;
-        const std::size_t cell = (std::size_t(idx[2]) * std::size_t(n) + (std::uint32_t(idx[1]) & mask)) * std::size_t(n) +
-                                 (std::uint32_t(idx[0]) & mask);
-        const std::uint32_t voxel = grid.cells[cell];
+        const std::uint32_t cell = grid.cell(std::uint32_t(idx[0]) & mask, std::uint32_t(idx[1]) & mask, std::uint32_t(idx[2]));
+        const std::uint32_t voxel = cell & LevelGrid::kEmpty ? 0 : cell;
         if (voxel != run) {
             if (run && !visit(grid.voxels[run], runStart, s - runStart)) return steps;
             run = voxel;
@@ -204,7 +203,7 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
         }
         const int a = next[0] <= next[1] ? (next[0] <= next[2] ? 0 : 2) : (next[1] <= next[2] ? 1 : 2);
         if (!voxel) {
-            const std::int64_t d = grid.distance[cell];
+            const std::int64_t d = cell & 0xFFu;
             if (d > 1) {
                 // The cube idx ± (d − 1) is empty; z is kept inside the grid, where the walk
                 // clamps its index.

@@ -81,7 +81,7 @@ TEST(March, GridWalkVisitsWhatTheBlockMarchVisits) {
                 }
         const LevelGrid* grid = volume.grid(l);
         ASSERT_NE(grid, nullptr);
-        const int d = grid->distance[(std::size_t(z) * std::size_t(m) + std::size_t(y)) * std::size_t(m) + std::size_t(x)];
+        const int d = grid->distance(std::uint32_t(x), std::uint32_t(y), std::uint32_t(z));
         if (l <= 6) EXPECT_EQ(d, best) << l << " " << x << " " << y << " " << z;
         else EXPECT_TRUE(d <= best && (d == 0) == (best == 0)) << l << " " << x << " " << y << " " << z << ": " << d << " " << best;
     }

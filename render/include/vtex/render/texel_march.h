@@ -50,20 +50,41 @@ struct GridVoxel {
 };
 GridVoxel gridVoxel(const octree::VoxelData& data);
 
-/// Level ℓ of a texel as a dense grid, for marching it with a plain voxel walk instead of
-/// descending the octree at every step: 2^ℓ·2^ℓ·2^ℓ voxel indices (index (z·2^ℓ + y)·2^ℓ + x)
-/// into `voxels`, one entry per stored node that stands for voxels of level ℓ (itself, or a
-/// leaf above), voxels[0] being the empty sentinel; and the empty-space distances of the level:
-/// the Chebyshev distance in voxels from each voxel to the nearest non-empty one (x and y
-/// periodic, as the texel tiles), capped at kCap: 0 for a non-empty voxel, d ≥ 1 when the
-/// (2d−1)³ voxels centred on it are all empty.
+/// Level ℓ (≤ 8) of a texel as a dense grid, for marching it with a plain voxel walk instead of
+/// descending the octree at every step. One 32-bit cell per voxel, in Morton (Z) order so that
+/// the voxels a ray crosses are near each other in memory (the walk waits on these loads): a
+/// non-empty voxel's cell is an index ≥ 1 into `voxels`, one entry per stored node that stands
+/// for voxels of level ℓ (itself, or a leaf above), voxels[0] unused; an empty voxel's cell is
+/// kEmpty | d, d its empty-space distance: the Chebyshev distance in voxels to the nearest
+/// non-empty voxel of the level (x and y periodic, as the texel tiles), capped at kCap, so that
+/// the (2d−1)³ voxels centred on it are all empty.
 struct LevelGrid {
     static constexpr int kCap = 16;
+    static constexpr std::uint32_t kEmpty = 0x80000000u;
+    static constexpr int kMaxLevel = 8;
     int level = 0;
     std::uint32_t n = 1;
     std::vector<std::uint32_t> cells;
     std::vector<GridVoxel> voxels;
-    std::vector<std::uint8_t> distance;
+
+    /// x, y, z < 256: bit i of each goes to bit 3i (x), 3i + 1 (y), 3i + 2 (z).
+    static std::uint32_t morton(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+        return kSpread[x & 255u] | (kSpread[y & 255u] << 1) | (kSpread[z & 255u] << 2);
+    }
+    std::uint32_t cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) const { return cells[morton(x, y, z)]; }
+    /// The empty-space distance at a voxel (0 when it is not empty).
+    int distance(std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
+        const std::uint32_t c = cell(x, y, z);
+        return c & kEmpty ? int(c & 0xFFu) : 0;
+    }
+
+private:
+    static constexpr std::array<std::uint32_t, 256> kSpread = [] {
+        std::array<std::uint32_t, 256> t{};
+        for (std::uint32_t i = 0; i < 256; ++i)
+            for (int b = 0; b < 8; ++b) t[i] |= ((i >> b) & 1u) << (3 * b);
+        return t;
+    }();
 };
 
 /// A texel's octree prepared for marching. Levels up to `maxGridLevel` are marched as dense
@@ -72,7 +93,7 @@ struct LevelGrid {
 /// marched through the octree itself, block by block. Both walks visit the same voxels.
 class MarchVolume {
 public:
-    static constexpr int kDefaultMaxGridLevel = 8;  ///< 64 MiB of cells at 256³
+    static constexpr int kDefaultMaxGridLevel = LevelGrid::kMaxLevel;  ///< 64 MiB of cells at 256³
     explicit MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGridLevel = kDefaultMaxGridLevel);
     ~MarchVolume();
     MarchVolume(const MarchVolume&) = delete;
