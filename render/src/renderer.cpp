@@ -172,18 +172,32 @@ private:
     // at the cell's sides, so that the lattice looked up is the right one. Two steps rather than
     // one: on the forest PSNR 49.1 instead of 47.7 dB (sparse bush), 42.4 instead of 41.4 (dense
     // bush, where the lattice blurs the terminator), for no measurable time.
+    //
+    // `span`, when the query comes from a camera march: the reference-space light direction and
+    // the local scale the march took at its span's middle, used instead of the query point's
+    // own (the mild-deformation assumption the march itself makes; it saves a Jacobian, its
+    // inverse and a cube root per query).
+    struct SpanFrame {
+        Vec3 light;  ///< unit, tiled reference space
+        double scale;
+    };
     double nearAndCachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, double width,
-                               Counters& counters) const {
+                               Counters& counters, const SpanFrame* span = nullptr) const {
         const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
         const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
-        Mat3 jt = prim.cell.jacobian(r);
-        jt.col(0) /= surface.repeatU;
-        jt.col(1) /= surface.repeatV;
-        Vec3 lr = jt.inverse() * l;
-        const double len = lr.norm();
-        if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
-        lr /= len;
+        Vec3 lr;
+        if (span) {
+            lr = span->light;
+        } else {
+            Mat3 jt = prim.cell.jacobian(r);
+            jt.col(0) /= surface.repeatU;
+            jt.col(1) /= surface.repeatV;
+            lr = jt.inverse() * l;
+            const double len = lr.norm();
+            if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
+            lr /= len;
+        }
         const Vec3 p0 = tile(r, surface);
         double step = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
         // Not past the cell's sides: the lattice looked up where the march ends is this cell's.
@@ -199,7 +213,7 @@ private:
             floor = true;  // the step reaches the base surface, which blocks
         }
         const Vec3 p1 = p0 + step * lr;
-        const double scale = localScale(prim.cell, r, surface);
+        const double scale = span ? span->scale : localScale(prim.cell, r, surface);
         const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
         const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
         const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tau, p0, p1, level, kTransmittanceCutoff);
@@ -284,6 +298,7 @@ private:
     void marchSpan(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, double tIn,
                    double tOut, PathState& state, Counters& counters) const {
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
+        const int primIndex = int(&prim - mTracer.prims().data());
         const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
         const Vec3 delta = p1 - p0;
         const double length = delta.norm();
@@ -340,6 +355,7 @@ private:
         struct SpanLight {
             bool directional = false;
             bool usable = false;  ///< directional: lr is finite
+            int latticeSlot = -1; ///< directional, usable, and the cell has a transmittance lattice
             Vec3 lw, lr;
             Color e;
         };
@@ -362,6 +378,10 @@ private:
             sl.directional = true;
             lightAt(mScene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
             sl.usable = referenceLight(sl.lw, sl.lr);
+            if (sl.usable && mOptions.shadowCacheResolution > 0) {
+                const int slot = mLightCache.slot(sl.lw);  // −1 also when there is no lattice at all
+                if (slot >= 0 && mLightCache.grid(primIndex).nw > 0) sl.latticeSlot = slot;
+            }
         }
         const double shadowRefresh = std::clamp(mOptions.shadowRefresh, 1e-6, 1.0);
         const auto run = [&](int level, bool record) {
@@ -421,8 +441,14 @@ private:
                             if (nearest >= 0) {
                                 shadowT[i] = track.t[std::size_t(nearest)];
                             } else {
-                                shadowT[i] = shadowTransmittance(worldPoint(), lw, distance, kShadowConeScale * mConeSpread * tWorld,
-                                                                 int(&prim - mTracer.prims().data()), rc, counters);
+                                const double width = kShadowConeScale * mConeSpread * tWorld;
+                                if (sl.latticeSlot >= 0) {
+                                    ++counters.shadow;
+                                    const SpanFrame frame{sl.lr, scale};
+                                    shadowT[i] = nearAndCachedShadow(sl.latticeSlot, primIndex, rc, lw, width, counters, &frame);
+                                } else {
+                                    shadowT[i] = shadowTransmittance(worldPoint(), lw, distance, width, primIndex, rc, counters);
+                                }
                                 if (record && track.count < kTrackCapacity) {
                                     track.s[std::size_t(track.count)] = sm;
                                     track.t[std::size_t(track.count)] = shadowT[i];
