@@ -16,7 +16,7 @@ namespace {
 
 using namespace vtex::render;
 
-constexpr std::size_t kCases = 1024;
+constexpr std::size_t kCases = 1024, kSegment = 8;
 
 struct Cases {
     std::vector<vtex::octree::VoxelData> voxels;
@@ -38,8 +38,14 @@ const Cases& cases() {
             vtex::octree::packEllipsoid(vtex::octree::Ellipsoid::fromAxes(r, sigma), voxel);
             out.voxels.push_back(voxel);
             out.s.push_back(voxelS(voxel));
-            out.light.push_back(Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
-            out.view.push_back(Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
+            // As along a ray segment through a cell: l and v change every kSegment voxels.
+            if (k % kSegment == 0) {
+                out.light.push_back(Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
+                out.view.push_back(Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
+            } else {
+                out.light.push_back(out.light.back());
+                out.view.push_back(out.view.back());
+            }
         }
         return out;
     }();
@@ -64,5 +70,20 @@ void BM_ReflectanceFast(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_ReflectanceFast)->Arg(40)->Arg(15);  // shininess 20 (the scene default) and 7.5
+
+// The renderer's case: one kernel per (l, v) along a ray segment, only S changes per call. The
+// same 1024 (S, l, v) as above, with the kernels built before timing.
+void BM_ReflectanceKernel(benchmark::State& state) {
+    const Cases& c = cases();
+    const double shininess = double(state.range(0)) / 2;
+    std::vector<ReflectanceKernel> kernels;
+    for (std::size_t k = 0; k < kCases; k += kSegment) kernels.emplace_back(c.light[k], c.view[k], shininess);
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const std::size_t k = i++ & (kCases - 1);
+        benchmark::DoNotOptimize(kernels[k / kSegment](c.s[k]));
+    }
+}
+BENCHMARK(BM_ReflectanceKernel)->Arg(40)->Arg(15);
 
 }  // namespace

@@ -75,13 +75,21 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
     static const Lattice l8(8), l16(16), l32(32), l64(64);
     mLattice = samples <= 8 ? &l8 : samples <= 16 ? &l16 : samples <= 32 ? &l32 : &l64;
     // Orthonormal basis (wk, wj, wi) with wi = view (Frisvad/Duff's branchless construction).
-    mWi = view;
     const double sign = std::copysign(1.0, view.z());
     const double a = -1.0 / (sign + view.z());
     const double b = view.x() * view.y() * a;
-    mWk = Vector3d(1 + sign * view.x() * view.x() * a, sign * b, -sign * view.x());
-    mWj = Vector3d(b, sign + view.y() * view.y() * a, -view.y());
-    mLight = Eigen::Vector3f(float(light.dot(mWk)), float(light.dot(mWj)), float(light.dot(mWi)));
+    const Vector3d wk(1 + sign * view.x() * view.x() * a, sign * b, -sign * view.x());
+    const Vector3d wj(b, sign + view.y() * view.y() * a, -view.y());
+    const std::array<const Vector3d*, 3> basis{&wk, &wj, &view};
+    // (pᵀSq) over S's entries: the diagonal ones once, the off-diagonal ones for both halves.
+    constexpr int kRow[6] = {0, 1, 2, 0, 0, 1}, kCol[6] = {0, 1, 2, 1, 2, 2};
+    for (int e = 0; e < 6; ++e)
+        for (int o = 0; o < 6; ++o) {
+            const Vector3d &p = *basis[std::size_t(kRow[o])], &q = *basis[std::size_t(kCol[o])];
+            const int x = kRow[e], y = kCol[e];
+            mProjection[std::size_t(6 * e + o)] = p[x] * q[y] + (x == y ? 0.0 : p[y] * q[x]);
+        }
+    mLight = Eigen::Vector3f(float(light.dot(wk)), float(light.dot(wj)), float(light.dot(view)));
     // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
     mCosCutoff = float(shininess <= 0        ? 0.0
                        : mWholePower >= 0    ? kCosCutoffs[std::size_t(std::min(mWholePower, 64))]
@@ -91,18 +99,38 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
 }
 
 octree::ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
-    const auto quad = [&](const Vector3d& p, const Vector3d& q) { return s.bilinear(p, q); };
-    const double Skk = quad(mWk, mWk), Sjj = quad(mWj, mWj), Sii = quad(mWi, mWi);
-    const double Skj = quad(mWk, mWj), Ski = quad(mWk, mWi), Sji = quad(mWj, mWi);
+    const double entries[6] = {s.xx, s.yy, s.zz, s.xy, s.xz, s.yz};
+    alignas(16) double t[6] = {};
+#if defined(__SSE2__)
+    // Two outputs per instruction: the compiler leaves this product scalar.
+    __m128d t01 = _mm_setzero_pd(), t23 = t01, t45 = t01;
+    for (std::size_t e = 0; e < 6; ++e) {
+        const __m128d se = _mm_set1_pd(entries[e]);
+        const double* c = &mProjection[6 * e];
+        t01 = _mm_add_pd(t01, _mm_mul_pd(se, _mm_load_pd(c)));
+        t23 = _mm_add_pd(t23, _mm_mul_pd(se, _mm_load_pd(c + 2)));
+        t45 = _mm_add_pd(t45, _mm_mul_pd(se, _mm_load_pd(c + 4)));
+    }
+    _mm_store_pd(t, t01);
+    _mm_store_pd(t + 2, t23);
+    _mm_store_pd(t + 4, t45);
+#else
+    for (std::size_t e = 0; e < 6; ++e)
+        for (std::size_t o = 0; o < 6; ++o) t[o] += mProjection[6 * e + o] * entries[e];
+#endif
+    const double Skk = t[0], Sjj = t[1], Sii = t[2], Skj = t[3], Ski = t[4], Sji = t[5];
     if (!(Sii > 0)) return {};
-    const double det = Skk * Sjj * Sii - Skj * Skj * Sii - Ski * Ski * Sjj - Sji * Sji * Skk + 2 * Skj * Ski * Sji;
-    const double sqrtDet = std::sqrt(std::abs(det));
-    const double invSqrtSii = 1 / std::sqrt(Sii);
-    // tmp² is the determinant of the (j,i) block; S is floored away from singular by the
-    // ellipsoid's axis-ratio floor, but float storage can round it to 0: keep it positive.
-    const double tmp = std::sqrt(std::max(Sjj * Sii - Sji * Sji, 1e-30 * Sii * Sii));
-    const Vector3d Mk(sqrtDet / tmp, 0, 0);
-    const Vector3d Mj(-invSqrtSii * (Ski * Sji - Skj * Sii) / tmp, invSqrtSii * tmp, 0);
+    // Heitz et al.'s Listing 3 with its square roots and divisions shared: blockDet (their tmp²)
+    // is the determinant of the (j,i) block; S is floored away from singular by the ellipsoid's
+    // axis-ratio floor, but float storage can round it to 0: keep it positive.
+    const double rawBlockDet = Sjj * Sii - Sji * Sji;
+    const double blockDet = std::max(rawBlockDet, 1e-30 * Sii * Sii);
+    const double cross = Skj * Sii - Ski * Sji;
+    const double det = Skk * rawBlockDet - Skj * cross + Ski * (Skj * Sji - Sjj * Ski);
+    const double r = 1 / std::sqrt(Sii * blockDet);
+    const double invSqrtSii = std::sqrt(blockDet) * r;
+    const Vector3d Mk(std::sqrt(std::abs(det) * Sii) * r, 0, 0);
+    const Vector3d Mj(cross * r, blockDet * r, 0);
     const Vector3d Mi(invSqrtSii * Ski, invSqrtSii * Sji, invSqrtSii * Sii);
     const Lattice& points = *mLattice;
     // m = u·Mk + v·Mj + w·Mi with Mk = (·,0,0), Mj = (·,·,0): written out. The sum runs in
@@ -132,6 +160,7 @@ octree::ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) co
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
         const __m128 cosAlpha = _mm_sub_ps(_mm_mul_ps(_mm_mul_ps(two, nl), _mm_mul_ps(mz, invLen)), lvv);
         const __m128 specular = _mm_and_ps(lit, _mm_cmpgt_ps(cosAlpha, cut));
+        // Most groups of a call have no point in the lobe.
         if (_mm_movemask_ps(specular) == 0) continue;
         __m128 p;
         if (mWholePower >= 0) {
@@ -142,9 +171,11 @@ octree::ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) co
                 base = _mm_mul_ps(base, base);
             }
         } else {
+            // libm's pow only where it counts: it costs more than the rest of the call.
             alignas(16) float c[4];
-            _mm_store_ps(c, _mm_max_ps(cosAlpha, zero));
-            for (float& x : c) x = float(std::pow(double(x), mShininess));
+            _mm_store_ps(c, cosAlpha);
+            const int lanes = _mm_movemask_ps(specular);
+            for (int k = 0; k < 4; ++k) c[k] = lanes & (1 << k) ? float(std::pow(double(c[k]), mShininess)) : 0.0f;
             p = _mm_load_ps(c);
         }
         specularSum = _mm_add_ps(specularSum, _mm_and_ps(specular, _mm_mul_ps(nl, p)));

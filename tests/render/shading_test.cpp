@@ -87,7 +87,7 @@ TEST(Shading, KernelEqualsThePlainMethodOnNeedlesAndDiscs) {
     std::mt19937 rng(5);
     const auto matrices = randomMatrices(rng, 64);
     double worst = 0;
-    for (double shininess : {0.0, 1.0, 7.5, 20.0, 100.3}) {
+    for (double shininess : {0.0, 1.0, 7.5, 20.0, 100.3, 200.0}) {
         for (int pair = 0; pair < 12; ++pair) {
             const Eigen::Vector3d l = randomDirection(rng), v = randomDirection(rng);
             const ReflectanceKernel kernel(l, v, shininess);

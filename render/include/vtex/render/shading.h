@@ -64,8 +64,11 @@ public:
 private:
     struct Lattice;
     const Lattice* mLattice;
-    Eigen::Vector3d mWk, mWj, mWi;  ///< orthonormal basis, mWi = view
-    Eigen::Vector3f mLight;         ///< light in (mWk, mWj, mWi)
+    /// S in the orthonormal basis (wk, wj, wi = view) as a linear map of S's six entries
+    /// (xx, yy, zz, xy, xz, yz) to (kk, jj, ii, kj, ki, ji): row e holds the six outputs'
+    /// coefficients of entry e.
+    alignas(16) std::array<double, 36> mProjection;
+    Eigen::Vector3f mLight;  ///< light in (wk, wj, wi)
     double mShininess;
     int mWholePower;  ///< the shininess when it is a whole number in [0, 1024], else −1
     float mCosCutoff;
