@@ -37,14 +37,12 @@ SggxMatrix voxelS(const octree::VoxelData& voxel) {
     return {entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2)};
 }
 
-namespace {
-
 // Fixed points on the unit disc: a Fibonacci lattice, radius √((i+½)/n) for equal areas. Kept
 // in single precision for the 4-wide loop below (n is a multiple of 4).
-struct DiscLattice {
+struct ReflectanceKernel::Lattice {
     alignas(16) std::array<float, 64> x{}, y{}, z{};  ///< z: the point lifted onto the hemisphere
     int n = 0;
-    explicit DiscLattice(int count) : n(count) {
+    explicit Lattice(int count) : n(count) {
         const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
         for (int i = 0; i < n; ++i) {
             const double r = std::sqrt((i + 0.5) / n);
@@ -56,23 +54,11 @@ struct DiscLattice {
     }
 };
 
-// xⁿ for the Phong exponent: by repeated squaring when n is a small whole number (the usual
-// case; exact to a few ulps, ~6 multiplies instead of a libm pow), std::pow otherwise.
-struct PhongPower {
-    double n;
-    int whole;  ///< n when it is a whole number in [0, 1024], else −1
-    explicit PhongPower(double exponent)
-        : n(exponent), whole(exponent >= 0 && exponent <= 1024 && exponent == std::floor(exponent) ? int(exponent) : -1) {}
-    double operator()(double x) const {
-        if (whole < 0) return std::pow(x, n);
-        double result = 1, base = x;
-        for (int e = whole; e > 0; e >>= 1) {
-            if (e & 1) result *= base;
-            base *= base;
-        }
-        return result;
-    }
-};
+namespace {
+
+// The shininess as a whole number in [0, 1024], for which xⁿ is taken by repeated squaring
+// (exact to a few ulps, ~6 multiplies instead of a libm pow); −1 otherwise.
+int wholePower(double n) { return n >= 0 && n <= 1024 && n == std::floor(n) ? int(n) : -1; }
 
 // pow(1e-6, 1/n) for whole n ≤ 64 (n = 0 unused), beyond which n is clamped to 64: a lower
 // cut-off only keeps more terms.
@@ -82,51 +68,79 @@ const std::array<double, 65> kCosCutoffs = [] {
     return c;
 }();
 
-const DiscLattice& lattice(int samples) {
-    static const DiscLattice l8(8), l16(16), l32(32), l64(64);
-    return samples <= 8 ? l8 : samples <= 16 ? l16 : samples <= 32 ? l32 : l64;
-}
-
 }  // namespace
 
-octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light,
-                                           const Vector3d& view, double shininess, int samples) {
+ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view, double shininess, int samples)
+    : mShininess(shininess), mWholePower(wholePower(shininess)) {
+    static const Lattice l8(8), l16(16), l32(32), l64(64);
+    mLattice = samples <= 8 ? &l8 : samples <= 16 ? &l16 : samples <= 32 ? &l32 : &l64;
     // Orthonormal basis (wk, wj, wi) with wi = view (Frisvad/Duff's branchless construction).
-    const Vector3d wi = view;
-    const double sign = std::copysign(1.0, wi.z());
-    const double a = -1.0 / (sign + wi.z());
-    const double b = wi.x() * wi.y() * a;
-    const Vector3d wk(1 + sign * wi.x() * wi.x() * a, sign * b, -sign * wi.x());
-    const Vector3d wj(b, sign + wi.y() * wi.y() * a, -wi.y());
-    const auto quad = [&](const Vector3d& p, const Vector3d& q) { return s.bilinear(p, q); };
-    const double Skk = quad(wk, wk), Sjj = quad(wj, wj), Sii = quad(wi, wi);
-    const double Skj = quad(wk, wj), Ski = quad(wk, wi), Sji = quad(wj, wi);
-    if (!(Sii > 0)) return {};
-    const double det = Skk * Sjj * Sii - Skj * Skj * Sii - Ski * Ski * Sjj - Sji * Sji * Skk + 2 * Skj * Ski * Sji;
-    const double sqrtDet = std::sqrt(std::abs(det));
-    const double invSqrtSii = 1 / std::sqrt(Sii);
-    // tmp² is the determinant of the (j,i) block; S is floored away from singular by the
-    // ellipsoid's axis-ratio floor, but float storage can round it to 0: keep it positive.
-    const double tmp = std::sqrt(std::max(Sjj * Sii - Sji * Sji, 1e-30 * Sii * Sii));
-    const Vector3d Mk(sqrtDet / tmp, 0, 0);
-    const Vector3d Mj(-invSqrtSii * (Ski * Sji - Skj * Sii) / tmp, invSqrtSii * tmp, 0);
-    const Vector3d Mi(invSqrtSii * Ski, invSqrtSii * Sji, invSqrtSii * Sii);
-    const Vector3d l(light.dot(wk), light.dot(wj), light.dot(wi));
-    const double lv = l.z();
-
-    const DiscLattice& points = lattice(samples);
-    const double specularNorm = (shininess + 2) / (2 * std::numbers::pi);
+    const double sign = std::copysign(1.0, view.z());
+    const double a = -1.0 / (sign + view.z());
+    const double b = view.x() * view.y() * a;
+    const Vector3d wk(1 + sign * view.x() * view.x() * a, sign * b, -sign * view.x());
+    const Vector3d wj(b, sign + view.y() * view.y() * a, -view.y());
+    const std::array<const Vector3d*, 3> basis{&wk, &wj, &view};
+    // (pᵀSq) over S's entries: the diagonal ones once, the off-diagonal ones for both halves.
+    constexpr int kRow[6] = {0, 1, 2, 0, 0, 1}, kCol[6] = {0, 1, 2, 1, 2, 2};
+    for (int e = 0; e < 6; ++e)
+        for (int o = 0; o < 6; ++o) {
+            const Vector3d &p = *basis[std::size_t(kRow[o])], &q = *basis[std::size_t(kCol[o])];
+            const int x = kRow[e], y = kCol[e];
+            mProjection[std::size_t(6 * e + o)] = p[x] * q[y] + (x == y ? 0.0 : p[y] * q[x]);
+        }
+    mLight = Eigen::Vector3f(float(light.dot(wk)), float(light.dot(wj)), float(light.dot(view)));
     // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
-    const PhongPower power(shininess);
-    const double cosCutoff = shininess <= 0 ? 0.0 : power.whole >= 0 ? kCosCutoffs[std::size_t(std::min(power.whole, 64))] : std::pow(1e-6, 1 / shininess);
+    mCosCutoff = float(shininess <= 0        ? 0.0
+                       : mWholePower >= 0    ? kCosCutoffs[std::size_t(std::min(mWholePower, 64))]
+                                             : std::pow(1e-6, 1 / shininess));
+    mDiffuseScale = 1 / (mLattice->n * std::numbers::pi);
+    mSpecularScale = (shininess + 2) / (2 * std::numbers::pi) / mLattice->n;
+}
+
+octree::ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
+    const double entries[6] = {s.xx, s.yy, s.zz, s.xy, s.xz, s.yz};
+    alignas(16) double t[6] = {};
+#if defined(__SSE2__)
+    // Two outputs per instruction: the compiler leaves this product scalar.
+    __m128d t01 = _mm_setzero_pd(), t23 = t01, t45 = t01;
+    for (std::size_t e = 0; e < 6; ++e) {
+        const __m128d se = _mm_set1_pd(entries[e]);
+        const double* c = &mProjection[6 * e];
+        t01 = _mm_add_pd(t01, _mm_mul_pd(se, _mm_load_pd(c)));
+        t23 = _mm_add_pd(t23, _mm_mul_pd(se, _mm_load_pd(c + 2)));
+        t45 = _mm_add_pd(t45, _mm_mul_pd(se, _mm_load_pd(c + 4)));
+    }
+    _mm_store_pd(t, t01);
+    _mm_store_pd(t + 2, t23);
+    _mm_store_pd(t + 4, t45);
+#else
+    for (std::size_t e = 0; e < 6; ++e)
+        for (std::size_t o = 0; o < 6; ++o) t[o] += mProjection[6 * e + o] * entries[e];
+#endif
+    const double Skk = t[0], Sjj = t[1], Sii = t[2], Skj = t[3], Ski = t[4], Sji = t[5];
+    if (!(Sii > 0)) return {};
+    // Heitz et al.'s Listing 3 with its square roots and divisions shared: blockDet (their tmp²)
+    // is the determinant of the (j,i) block; S is floored away from singular by the ellipsoid's
+    // axis-ratio floor, but float storage can round it to 0: keep it positive.
+    const double rawBlockDet = Sjj * Sii - Sji * Sji;
+    const double blockDet = std::max(rawBlockDet, 1e-30 * Sii * Sii);
+    const double cross = Skj * Sii - Ski * Sji;
+    const double det = Skk * rawBlockDet - Skj * cross + Ski * (Skj * Sji - Sjj * Ski);
+    const double r = 1 / std::sqrt(Sii * blockDet);
+    const double invSqrtSii = std::sqrt(blockDet) * r;
+    const Vector3d Mk(std::sqrt(std::abs(det) * Sii) * r, 0, 0);
+    const Vector3d Mj(cross * r, blockDet * r, 0);
+    const Vector3d Mi(invSqrtSii * Ski, invSqrtSii * Sji, invSqrtSii * Sii);
+    const Lattice& points = *mLattice;
     // m = u·Mk + v·Mj + w·Mi with Mk = (·,0,0), Mj = (·,·,0): written out. The sum runs in
     // single precision, four lattice points at a time (SSE2, part of every x86-64): its
     // rounding (~1e-7 relative) is far below the quadrature's own error.
 #if defined(__SSE2__)
     const __m128 mkx = _mm_set1_ps(float(Mk.x())), mjx = _mm_set1_ps(float(Mj.x())), mjy = _mm_set1_ps(float(Mj.y()));
     const __m128 mix = _mm_set1_ps(float(Mi.x())), miy = _mm_set1_ps(float(Mi.y())), miz = _mm_set1_ps(float(Mi.z()));
-    const __m128 lx = _mm_set1_ps(float(l.x())), ly = _mm_set1_ps(float(l.y())), lz = _mm_set1_ps(float(l.z()));
-    const __m128 lvv = _mm_set1_ps(float(lv)), cut = _mm_set1_ps(float(cosCutoff));
+    const __m128 lx = _mm_set1_ps(mLight.x()), ly = _mm_set1_ps(mLight.y()), lz = _mm_set1_ps(mLight.z());
+    const __m128 lvv = lz, cut = _mm_set1_ps(mCosCutoff);
     const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), two = _mm_set1_ps(2.0f);
     __m128 diffuseSum = zero, specularSum = zero;
     for (int n = 0; n < points.n; n += 4) {
@@ -146,19 +160,22 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
         const __m128 cosAlpha = _mm_sub_ps(_mm_mul_ps(_mm_mul_ps(two, nl), _mm_mul_ps(mz, invLen)), lvv);
         const __m128 specular = _mm_and_ps(lit, _mm_cmpgt_ps(cosAlpha, cut));
+        // Most groups of a call have no point in the lobe.
         if (_mm_movemask_ps(specular) == 0) continue;
         __m128 p;
-        if (power.whole >= 0) {
+        if (mWholePower >= 0) {
             p = one;
             __m128 base = cosAlpha;
-            for (int e = power.whole; e > 0; e >>= 1) {
+            for (int e = mWholePower; e > 0; e >>= 1) {
                 if (e & 1) p = _mm_mul_ps(p, base);
                 base = _mm_mul_ps(base, base);
             }
         } else {
+            // libm's pow only where it counts: it costs more than the rest of the call.
             alignas(16) float c[4];
-            _mm_store_ps(c, _mm_max_ps(cosAlpha, zero));
-            for (float& x : c) x = float(std::pow(double(x), shininess));
+            _mm_store_ps(c, cosAlpha);
+            const int lanes = _mm_movemask_ps(specular);
+            for (int k = 0; k < 4; ++k) c[k] = lanes & (1 << k) ? float(std::pow(double(c[k]), mShininess)) : 0.0f;
             p = _mm_load_ps(c);
         }
         specularSum = _mm_add_ps(specularSum, _mm_and_ps(specular, _mm_mul_ps(nl, p)));
@@ -169,6 +186,7 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
     const double diffuse = double(sums[0]) + double(sums[1]) + double(sums[2]) + double(sums[3]);
     const double specular = double(sums[4]) + double(sums[5]) + double(sums[6]) + double(sums[7]);
 #else
+    const Vector3d l = mLight.cast<double>();
     double diffuse = 0, specular = 0;
     for (int n = 0; n < points.n; ++n) {
         const double u = points.x[std::size_t(n)], v = points.y[std::size_t(n)];
@@ -184,11 +202,27 @@ octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& 
         const double nl = ml * invLen;
         diffuse += nl;
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
-        const double cosAlpha = 2 * nl * (mz * invLen) - lv;
-        if (cosAlpha > cosCutoff) specular += nl * power(cosAlpha);
+        const double cosAlpha = 2 * nl * (mz * invLen) - l.z();
+        if (!(cosAlpha > mCosCutoff)) continue;
+        double power = 1;
+        if (mWholePower >= 0) {
+            double base = cosAlpha;
+            for (int e = mWholePower; e > 0; e >>= 1) {
+                if (e & 1) power *= base;
+                base *= base;
+            }
+        } else {
+            power = std::pow(cosAlpha, mShininess);
+        }
+        specular += nl * power;
     }
 #endif
-    return {diffuse / (points.n * std::numbers::pi), specular * specularNorm / points.n};
+    return {diffuse * mDiffuseScale, specular * mSpecularScale};
+}
+
+octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light,
+                                           const Vector3d& view, double shininess, int samples) {
+    return ReflectanceKernel(light, view, shininess, samples)(s);
 }
 
 }  // namespace vtex::render

@@ -1,0 +1,89 @@
+// Cost per voxel of the renderer's shading inputs: the S matrix a voxel stores, and the fast
+// micro-primitive reflectance. Inputs are drawn as in render_reflectance_error (σ ratios over
+// four decades, random light and view) and cycled through 1024 of them, so branches and the
+// specular cut-off see a realistic mix rather than one repeated case.
+#include <vtex/octree/voxel.h>
+#include <vtex/render/shading.h>
+
+#include <Eigen/Geometry>
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace {
+
+using namespace vtex::render;
+
+constexpr std::size_t kCases = 1024, kSegment = 8;
+
+struct Cases {
+    std::vector<vtex::octree::VoxelData> voxels;
+    std::vector<SggxMatrix> s;
+    std::vector<Eigen::Vector3d> light, view;
+};
+
+const Cases& cases() {
+    static const Cases c = [] {
+        Cases out;
+        std::mt19937 rng(1);
+        std::normal_distribution<double> n;
+        std::uniform_real_distribution<double> logRatio(-4, 0);
+        for (std::size_t k = 0; k < kCases; ++k) {
+            const Eigen::Matrix3d r = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+            const Eigen::Vector3d sigma(std::pow(10.0, logRatio(rng)), std::pow(10.0, logRatio(rng)), 1.0);
+            vtex::octree::VoxelData voxel;
+            voxel.density = 1;
+            vtex::octree::packEllipsoid(vtex::octree::Ellipsoid::fromAxes(r, sigma), voxel);
+            out.voxels.push_back(voxel);
+            out.s.push_back(voxelS(voxel));
+            // As along a ray segment through a cell: l and v change every kSegment voxels.
+            if (k % kSegment == 0) {
+                out.light.push_back(Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
+                out.view.push_back(Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
+            } else {
+                out.light.push_back(out.light.back());
+                out.view.push_back(out.view.back());
+            }
+        }
+        return out;
+    }();
+    return c;
+}
+
+void BM_VoxelS(benchmark::State& state) {
+    const Cases& c = cases();
+    std::size_t i = 0;
+    for (auto _ : state) benchmark::DoNotOptimize(voxelS(c.voxels[i++ & (kCases - 1)]));
+}
+BENCHMARK(BM_VoxelS);
+
+// Everything per call: the basis around v and the light in it are rebuilt each time.
+void BM_ReflectanceFast(benchmark::State& state) {
+    const Cases& c = cases();
+    const double shininess = double(state.range(0)) / 2;
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const std::size_t k = i++ & (kCases - 1);
+        benchmark::DoNotOptimize(reflectanceFast(c.s[k], c.light[k], c.view[k], shininess));
+    }
+}
+BENCHMARK(BM_ReflectanceFast)->Arg(40)->Arg(15);  // shininess 20 (the scene default) and 7.5
+
+// The renderer's case: one kernel per (l, v) along a ray segment, only S changes per call. The
+// same 1024 (S, l, v) as above, with the kernels built before timing.
+void BM_ReflectanceKernel(benchmark::State& state) {
+    const Cases& c = cases();
+    const double shininess = double(state.range(0)) / 2;
+    std::vector<ReflectanceKernel> kernels;
+    for (std::size_t k = 0; k < kCases; k += kSegment) kernels.emplace_back(c.light[k], c.view[k], shininess);
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const std::size_t k = i++ & (kCases - 1);
+        benchmark::DoNotOptimize(kernels[k / kSegment](c.s[k]));
+    }
+}
+BENCHMARK(BM_ReflectanceKernel)->Arg(40)->Arg(15);
+
+}  // namespace
