@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 namespace vtex::render {
 
@@ -358,6 +359,7 @@ private:
             int latticeSlot = -1; ///< directional, usable, and the cell has a transmittance lattice
             Vec3 lw, lr;
             Color e;
+            std::optional<ReflectanceKernel> kernel;  ///< directional, usable, fast shading
         };
         std::array<SpanLight, 16> spanLights;
         bool anyPointLight = false;
@@ -378,6 +380,7 @@ private:
             sl.directional = true;
             lightAt(mScene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
             sl.usable = referenceLight(sl.lw, sl.lr);
+            if (sl.usable && mOptions.shading == ShadingMode::Fast) sl.kernel.emplace(sl.lr, view, m.shininess);
             if (sl.usable && mOptions.shadowCacheResolution > 0) {
                 const int slot = mLightCache.slot(sl.lw);  // −1 also when there is no lattice at all
                 if (slot >= 0 && mLightCache.grid(primIndex).nw > 0) sl.latticeSlot = slot;
@@ -462,7 +465,8 @@ private:
                         Vec3 lr = sl.lr;
                         if (sl.directional ? !sl.usable : !referenceLight(lw, lr)) continue;
                         ++counters.reflectance;
-                        const auto f = mOptions.shading == ShadingMode::Fast
+                        const auto f = sl.kernel ? (*sl.kernel)(sMatrix)
+                                       : mOptions.shading == ShadingMode::Fast
                                            ? reflectanceFast(sMatrix, lr, view, m.shininess)
                                            : reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
                         lk += shadowT[i] * e.cwiseProduct(m.diffuse.cwiseProduct(albedo) * f.diffuse + m.specular * f.specular);
