@@ -68,6 +68,13 @@ int intersectPatch(const PatchView& p, const Vec3& d, double tMin, double tMax, 
     const double a = p.twist.dot(d);
     const double c = p.q00xd.dot(p.e00);
     const double b = p.q10xd.dot(p.e11) - (a + c);
+    // No root in the accepted u range when the quadratic has one sign at both ends of it and
+    // does not turn back within it: on the forest benchmark half the faces of the cells a ray
+    // is offered end here, before the square root and the divisions.
+    const double f0 = c - kEdgeSlack * b, f1 = a + b + c + kEdgeSlack * (2 * a + b);
+    if ((f0 > 0 && f1 > 0 && !(a > 0 && b < 0 && 2 * a + b > 0)) ||
+        (f0 < 0 && f1 < 0 && !(a < 0 && b > 0 && 2 * a + b < 0)))
+        return 0;
     double us[2];
     const int roots = solveQuadratic(a, b, c, us[0], us[1]);
     int count = 0;
@@ -85,11 +92,12 @@ int intersectPatch(const PatchView& p, const Vec3& d, double tMin, double tMax, 
         const double p2 = perp.squaredNorm();
         if (!(p2 > 0)) continue;  // collapsed isoline (a triangle's apex) or ray along it
         const Vec3 n = perp.cross(qa);
-        const double v = n.dot(d) / p2;
+        // v = v1 / p2 is range-checked before the division: about half the roots fail here.
+        const double v1 = n.dot(d);
+        if (!(v1 >= -kEdgeSlack * p2 && v1 <= (1 + kEdgeSlack) * p2)) continue;
         const double t = n.dot(eb) / p2;
-        if (!(v >= -kEdgeSlack && v <= 1 + kEdgeSlack)) continue;
         if (!(t > tMin && t < tMax) || !std::isfinite(t)) continue;
-        hits[count++] = PatchHit{t, u, std::clamp(v, 0.0, 1.0)};
+        hits[count++] = PatchHit{t, u, std::clamp(v1 / p2, 0.0, 1.0)};
     }
     if (count == 2 && hits[1].t < hits[0].t) std::swap(hits[0], hits[1]);
     return count;
@@ -162,14 +170,15 @@ std::array<Vec3, 4> TrilinearCell::faceCorners(int face) const {
 }
 
 Vec3 TrilinearCell::faceToCell(int face, double a, double b) {
-    switch (face) {
-        case 0: return {a, b, 0};
-        case 1: return {a, b, 1};
-        case 2: return {0, a, b};
-        case 3: return {1, a, b};
-        case 4: return {a, 0, b};
-        default: return {a, 1, b};
-    }
+    // A table, not a switch: cellSpans calls this for every crossing, and the jump on the face
+    // index is unpredictable.
+    static constexpr int kAxes[6][3] = {{0, 1, 2}, {0, 1, 2}, {1, 2, 0}, {1, 2, 0}, {0, 2, 1}, {0, 2, 1}};
+    const auto& axes = kAxes[face];
+    Vec3 r;
+    r[axes[0]] = a;
+    r[axes[1]] = b;
+    r[axes[2]] = face % 2;
+    return r;
 }
 
 std::optional<Vec3> TrilinearCell::inverse(const Vec3& x, const Vec3& guess, double tolerance,
