@@ -27,6 +27,8 @@ constexpr double kEdgeSlack = 1e-9;
 // see TrilinearCell::faceCorners for the faces' parameters.
 constexpr int kFaceCorners[6][4] = {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 2, 4, 6},
                                     {1, 3, 5, 7}, {0, 1, 4, 5}, {2, 3, 6, 7}};
+// The index in (u, v, w) of the coordinate each face holds fixed.
+constexpr int kFaceCoordinate[6] = {2, 2, 0, 0, 1, 1};
 
 // Roots of a t² + b t + c in increasing order, by the cancellation-free form
 // q = −(b + sign(b)√Δ)/2, roots q/a and c/q.
@@ -44,9 +46,11 @@ int solveQuadratic(double a, double b, double c, double& r0, double& r1) {
         r0 = r1 = 0;
         return 1;
     }
-    r0 = q / a;
-    r1 = c / q;
-    if (r0 > r1) std::swap(r0, r1);
+    // min and max rather than a conditional swap: the order is unpredictable, and they compile
+    // to branch-free instructions.
+    const double x0 = q / a, x1 = c / q;
+    r0 = std::min(x0, x1);
+    r1 = std::max(x0, x1);
     return 2;
 }
 
@@ -71,10 +75,12 @@ int intersectPatch(const PatchView& p, const Vec3& d, double tMin, double tMax, 
     // No root in the accepted u range when the quadratic has one sign at both ends of it and
     // does not turn back within it: on the forest benchmark half the faces of the cells a ray
     // is offered end here, before the square root and the divisions.
-    const double f0 = c - kEdgeSlack * b, f1 = a + b + c + kEdgeSlack * (2 * a + b);
-    if ((f0 > 0 && f1 > 0 && !(a > 0 && b < 0 && 2 * a + b > 0)) ||
-        (f0 < 0 && f1 < 0 && !(a < 0 && b > 0 && 2 * a + b < 0)))
-        return 0;
+    // The conditions are combined with & and | into a single branch: the outcome is a coin toss
+    // per face, and one mispredicted branch is cheaper than several.
+    const double f0 = c - kEdgeSlack * b, f1 = a + b + c + kEdgeSlack * (2 * a + b), slope1 = 2 * a + b;
+    const bool positive = (f0 > 0) & (f1 > 0) & !((a > 0) & (b < 0) & (slope1 > 0));
+    const bool negative = (f0 < 0) & (f1 < 0) & !((a < 0) & (b > 0) & (slope1 < 0));
+    if (positive | negative) return 0;
     double us[2];
     const int roots = solveQuadratic(a, b, c, us[0], us[1]);
     int count = 0;
@@ -251,8 +257,7 @@ int cellSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::arra
                              corner[k[2]] - corner[k[0]], corner[k[3]] - corner[k[1]], cell.faceTwist(face)};
         std::array<PatchHit, 2> hits;
         const int count = intersectPatch(view, d, 0.0, std::numeric_limits<double>::infinity(), hits);
-        const int axis = face / 2;                // 0: w, 1: u, 2: v
-        const int coord = axis == 0 ? 2 : axis - 1;  // index of the face's coordinate in (u,v,w)
+        const int coord = kFaceCoordinate[face];
         for (int h = 0; h < count; ++h) {
             const Vec3 r = TrilinearCell::faceToCell(face, hits[h].u, hits[h].v);
             const Mat3 j = cell.jacobian(r);
