@@ -79,7 +79,8 @@ void BM_BilinearPatch(benchmark::State& state) {
     for (auto _ : state) {
         const RayCase& c = cases[i++ & 1023];
         const auto& x = c.cell.corners();
-        benchmark::DoNotOptimize(intersectBilinearPatchAll(c.o, c.d, x[4], x[5], x[6], x[7], 0, 1e30, hits));
+        benchmark::DoNotOptimize(
+            intersectBilinearPatchAll(c.o, c.d, x[4], x[5], x[6], x[7], 0, 1e30, hits));
         benchmark::DoNotOptimize(hits);
     }
 }

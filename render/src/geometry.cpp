@@ -66,7 +66,10 @@ struct PatchView {
     const Vec3& twist;
 };
 
-int intersectPatch(const PatchView& p, const Vec3& d, double tMin, double tMax, std::array<PatchHit, 2>& hits) {
+// Inlined into cellSpans' loop over the faces, where the shared corner terms stay in registers
+// (vtex_geometry_bench: ~10 % fewer instructions per cell).
+[[gnu::always_inline]] inline int intersectPatch(const PatchView& p, const Vec3& d, double tMin,
+                                                 double tMax, std::array<PatchHit, 2>& hits) {
     // The ray meets the line through the u-isoline where det(q(u), d, e(u)) = 0, q(u) the
     // isoline's start and e(u) its direction: a quadratic a u² + b u + c.
     const double a = p.twist.dot(d);
@@ -74,10 +77,10 @@ int intersectPatch(const PatchView& p, const Vec3& d, double tMin, double tMax, 
     const double b = p.q10xd.dot(p.e11) - (a + c);
     // No root in the accepted u range when the quadratic has one sign at both ends of it and
     // does not turn back within it: on the forest benchmark half the faces of the cells a ray
-    // is offered end here, before the square root and the divisions.
-    // The conditions are combined with & and | into a single branch: the outcome is a coin toss
-    // per face, and one mispredicted branch is cheaper than several.
-    const double f0 = c - kEdgeSlack * b, f1 = a + b + c + kEdgeSlack * (2 * a + b), slope1 = 2 * a + b;
+    // is offered end here, before the square root and the divisions. The conditions are
+    // combined with & and | into a single branch: the outcome is a coin toss per face, and one
+    // mispredicted branch is cheaper than several.
+    const double f0 = c - kEdgeSlack * b, slope1 = 2 * a + b, f1 = a + b + c + kEdgeSlack * slope1;
     const bool positive = (f0 > 0) & (f1 > 0) & !((a > 0) & (b < 0) & (slope1 > 0));
     const bool negative = (f0 < 0) & (f1 < 0) & !((a < 0) & (b > 0) & (slope1 < 0));
     if (positive | negative) return 0;
@@ -117,8 +120,8 @@ int intersectBilinearPatchAll(const Vec3& o, const Vec3& d, const Vec3& p00, con
     const Vec3 q00 = p00 - o;
     const Vec3 q00xd = q00.cross(d), q10xd = (p10 - o).cross(d);
     const Vec3 twist = (p10 - p00).cross(p01 - p11);
-    return intersectPatch(PatchView{q00, q00xd, q10xd, p10 - p00, p01 - p00, p11 - p10, twist}, d, tMin,
-                          tMax, hits);
+    return intersectPatch(PatchView{q00, q00xd, q10xd, p10 - p00, p01 - p00, p11 - p10, twist}, d,
+                          tMin, tMax, hits);
 }
 
 std::optional<PatchHit> intersectBilinearPatch(const Vec3& o, const Vec3& d, const Vec3& p00,
@@ -178,7 +181,8 @@ std::array<Vec3, 4> TrilinearCell::faceCorners(int face) const {
 Vec3 TrilinearCell::faceToCell(int face, double a, double b) {
     // A table, not a switch: cellSpans calls this for every crossing, and the jump on the face
     // index is unpredictable.
-    static constexpr int kAxes[6][3] = {{0, 1, 2}, {0, 1, 2}, {1, 2, 0}, {1, 2, 0}, {0, 2, 1}, {0, 2, 1}};
+    static constexpr int kAxes[6][3] = {{0, 1, 2}, {0, 1, 2}, {1, 2, 0},
+                                        {1, 2, 0}, {0, 2, 1}, {0, 2, 1}};
     const auto& axes = kAxes[face];
     Vec3 r;
     r[axes[0]] = a;
@@ -254,9 +258,11 @@ int cellSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::arra
     for (int face = 0; face < 6; ++face) {
         const auto& k = kFaceCorners[face];
         const PatchView view{q[k[0]], qxd[k[0]], qxd[k[1]], corner[k[1]] - corner[k[0]],
-                             corner[k[2]] - corner[k[0]], corner[k[3]] - corner[k[1]], cell.faceTwist(face)};
+                             corner[k[2]] - corner[k[0]], corner[k[3]] - corner[k[1]],
+                             cell.faceTwist(face)};
         std::array<PatchHit, 2> hits;
-        const int count = intersectPatch(view, d, 0.0, std::numeric_limits<double>::infinity(), hits);
+        const int count =
+            intersectPatch(view, d, 0.0, std::numeric_limits<double>::infinity(), hits);
         const int coord = kFaceCoordinate[face];
         for (int h = 0; h < count; ++h) {
             const Vec3 r = TrilinearCell::faceToCell(face, hits[h].u, hits[h].v);

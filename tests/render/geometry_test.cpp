@@ -37,8 +37,8 @@ TrilinearCell randomCell(std::mt19937& rng, double jitter, double tilt, double h
 
 // An independent oracle for the patch test: pbrt-v4's IntersectBilinearPatch set-up (the quadratic
 // from the corners, v and t from two 3×3 determinants), in double precision, returning both roots.
-int pbrtPatchHits(const Vec3& o, const Vec3& d, const Vec3& p00, const Vec3& p10, const Vec3& p01, const Vec3& p11,
-                  std::array<PatchHit, 2>& hits) {
+int pbrtPatchHits(const Vec3& o, const Vec3& d, const Vec3& p00, const Vec3& p10, const Vec3& p01,
+                  const Vec3& p11, std::array<PatchHit, 2>& hits) {
     const double a = (p10 - p00).cross(p01 - p11).dot(d);
     const double c = (p00 - o).cross(d).dot(p01 - p00);
     const double b = (p10 - o).cross(d).dot(p11 - p10) - (a + c);
@@ -118,7 +118,8 @@ TEST(BilinearPatch, AgreesWithPbrtOracleOnTwistedPatches) {
     int hitsSeen = 0;
     for (int k = 0; k < 4000; ++k) {
         const Vec3 shift = k % 2 ? Vec3(300, -200, 50) : Vec3::Zero();
-        const Vec3 p00 = shift + Vec3(u(rng), u(rng), u(rng)), p10 = shift + Vec3(2, 0, 0) + Vec3(u(rng), u(rng), u(rng)),
+        const Vec3 p00 = shift + Vec3(u(rng), u(rng), u(rng)),
+                   p10 = shift + Vec3(2, 0, 0) + Vec3(u(rng), u(rng), u(rng)),
                    p01 = shift + Vec3(0, 2, 0) + Vec3(u(rng), u(rng), u(rng)),
                    p11 = shift + Vec3(2, 2, 0) + Vec3(u(rng), u(rng), u(rng));
         const Vec3 target = bilerp(p00, p10, p01, p11, aim(rng), aim(rng));
@@ -217,8 +218,8 @@ TEST(Cell, SpansAgreeWithThePatchTestOfEachFace) {
         int anyHit = 0;
         for (int face = 0; face < 6; ++face) {
             const auto p = cell.faceCorners(face);
-            faceCount[std::size_t(face)] =
-                intersectBilinearPatchAll(o, d, p[0], p[1], p[2], p[3], 0, 1e30, faceHits[std::size_t(face)]);
+            faceCount[std::size_t(face)] = intersectBilinearPatchAll(
+                o, d, p[0], p[1], p[2], p[3], 0, 1e30, faceHits[std::size_t(face)]);
             anyHit += faceCount[std::size_t(face)];
         }
         const auto isFaceHit = [&](int face, double t, const Vec3& r) {
