@@ -1,6 +1,7 @@
 // Ray–bilinear-patch intersection, cell spans and the inverse trilinear map.
 #include <vtex/render/geometry.h>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <random>
@@ -32,6 +33,40 @@ TrilinearCell randomCell(std::mt19937& rng, double jitter, double tilt, double h
         n[std::size_t(i)] = (twisted - Vec3(c.x(), c.y(), 0)) / h + Vec3(tilt * u(rng), tilt * u(rng), 1);
     }
     return TrilinearCell(p, n, h, false);
+}
+
+// An independent oracle for the patch test: pbrt-v4's IntersectBilinearPatch set-up (the quadratic
+// from the corners, v and t from two 3×3 determinants), in double precision, returning both roots.
+int pbrtPatchHits(const Vec3& o, const Vec3& d, const Vec3& p00, const Vec3& p10, const Vec3& p01,
+                  const Vec3& p11, std::array<PatchHit, 2>& hits) {
+    const double a = (p10 - p00).cross(p01 - p11).dot(d);
+    const double c = (p00 - o).cross(d).dot(p01 - p00);
+    const double b = (p10 - o).cross(d).dot(p11 - p10) - (a + c);
+    std::vector<double> us;
+    if (a == 0) {
+        if (b != 0) us.push_back(-c / b);
+    } else {
+        const double disc = b * b - 4 * a * c;
+        if (disc >= 0) {
+            us.push_back((-b - std::sqrt(disc)) / (2 * a));
+            us.push_back((-b + std::sqrt(disc)) / (2 * a));
+        }
+    }
+    int count = 0;
+    for (const double u : us) {
+        if (u < 0 || u > 1) continue;
+        const Vec3 uo = p00 + u * (p10 - p00);
+        const Vec3 ud = p01 + u * (p11 - p01) - uo;
+        const Vec3 deltao = uo - o;
+        const Vec3 perp = d.cross(ud);
+        const double p2 = perp.squaredNorm();
+        const double v = deltao.dot(d.cross(perp)) / p2;
+        const double t = deltao.dot(ud.cross(perp)) / p2;
+        if (v < 0 || v > 1 || t <= 0) continue;
+        hits[std::size_t(count++)] = PatchHit{t, u, v};
+    }
+    if (count == 2 && hits[1].t < hits[0].t) std::swap(hits[0], hits[1]);
+    return count;
 }
 
 }  // namespace
@@ -72,6 +107,38 @@ TEST(BilinearPatch, RandomPatchesReintersect) {
         missed += !found;
     }
     EXPECT_EQ(missed, 0);
+}
+
+// The patch test against the pbrt-v4 oracle on random twisted patches (corners jittered by ±1
+// out of a 2×2 square), away from the world origin and near it, with rays aimed at points inside
+// and outside the patch: the same hits, to 1e-9 relative in t and 1e-9 in (u, v).
+TEST(BilinearPatch, AgreesWithPbrtOracleOnTwistedPatches) {
+    std::mt19937 rng(19);
+    std::uniform_real_distribution<double> u(-1, 1), aim(-0.3, 1.3);
+    int hitsSeen = 0;
+    for (int k = 0; k < 4000; ++k) {
+        const Vec3 shift = k % 2 ? Vec3(300, -200, 50) : Vec3::Zero();
+        const Vec3 p00 = shift + Vec3(u(rng), u(rng), u(rng)),
+                   p10 = shift + Vec3(2, 0, 0) + Vec3(u(rng), u(rng), u(rng)),
+                   p01 = shift + Vec3(0, 2, 0) + Vec3(u(rng), u(rng), u(rng)),
+                   p11 = shift + Vec3(2, 2, 0) + Vec3(u(rng), u(rng), u(rng));
+        const Vec3 target = bilerp(p00, p10, p01, p11, aim(rng), aim(rng));
+        const Vec3 o = target + 5 * randomUnit(rng);
+        const Vec3 d = (target - o).normalized();
+        std::array<PatchHit, 2> hits, expected;
+        const int n = intersectBilinearPatchAll(o, d, p00, p10, p01, p11, 0, 1e30, hits);
+        const int m = pbrtPatchHits(o, d, p00, p10, p01, p11, expected);
+        ASSERT_EQ(n, m) << k;
+        for (std::size_t i = 0; i < std::size_t(n); ++i) {
+            EXPECT_NEAR(hits[i].t, expected[i].t, 1e-9 * expected[i].t) << k;
+            EXPECT_NEAR(hits[i].u, expected[i].u, 1e-9) << k;
+            EXPECT_NEAR(hits[i].v, expected[i].v, 1e-9) << k;
+        }
+        hitsSeen += n;
+    }
+    // Both outcomes are exercised: about half the rays are aimed off the patch.
+    EXPECT_GT(hitsSeen, 1500);
+    EXPECT_LT(hitsSeen, 3500);
 }
 
 TEST(BilinearPatch, CollapsedEdgeIsATriangle) {
@@ -131,6 +198,52 @@ TEST(Cell, RandomCellSpansAreConsistent) {
         }
         EXPECT_TRUE(contains) << k;
     }
+}
+
+// cellSpans shares work between the six faces of a cell; on random twisted cells and rays aimed
+// in and around them, it must agree with the plain patch test on each face: every span end is a
+// hit of that face's patch at that t and those cell coordinates, a ray from outside that meets
+// some face has a span, and one that meets none has none.
+TEST(Cell, SpansAgreeWithThePatchTestOfEachFace) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> aim(-0.4, 1.4);
+    int withSpans = 0, without = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const TrilinearCell cell = randomCell(rng, 0.2, 0.4, 0.7, k % 3 ? 0.8 : 0.0);
+        const Vec3 target = cell.map(Vec3(aim(rng), aim(rng), aim(rng)));
+        const Vec3 o = target + 6 * randomUnit(rng);
+        const Vec3 d = (target - o).normalized();
+        std::array<std::array<PatchHit, 2>, 6> faceHits;
+        std::array<int, 6> faceCount;
+        int anyHit = 0;
+        for (int face = 0; face < 6; ++face) {
+            const auto p = cell.faceCorners(face);
+            faceCount[std::size_t(face)] = intersectBilinearPatchAll(
+                o, d, p[0], p[1], p[2], p[3], 0, 1e30, faceHits[std::size_t(face)]);
+            anyHit += faceCount[std::size_t(face)];
+        }
+        const auto isFaceHit = [&](int face, double t, const Vec3& r) {
+            for (int h = 0; h < faceCount[std::size_t(face)]; ++h) {
+                const PatchHit& hit = faceHits[std::size_t(face)][std::size_t(h)];
+                if (std::abs(hit.t - t) <= 1e-9 * t &&
+                    (TrilinearCell::faceToCell(face, hit.u, hit.v) - r).norm() <= 1e-9)
+                    return true;
+            }
+            return false;
+        };
+        std::array<CellSpan, 4> spans;
+        const int n = cellSpans(cell, o, d, spans);
+        EXPECT_EQ(n > 0, anyHit > 0) << k;
+        for (int i = 0; i < n; ++i) {
+            const CellSpan& s = spans[std::size_t(i)];
+            ASSERT_GE(s.faceIn, 0) << k;  // the origin is outside the cell
+            EXPECT_TRUE(isFaceHit(s.faceIn, s.tIn, s.rIn)) << k;
+            EXPECT_TRUE(isFaceHit(s.faceOut, s.tOut, s.rOut)) << k;
+        }
+        (n > 0 ? withSpans : without) += 1;
+    }
+    EXPECT_GT(withSpans, 500);
+    EXPECT_GT(without, 300);
 }
 
 // The inverse trilinear map on random cells and on strongly twisted ones (top rotated by up to

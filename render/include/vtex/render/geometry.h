@@ -6,8 +6,9 @@
 /// X(u,v,w) = bilerp_uv(Pij + (w − w0)·H·Nij), (u,v,w) ∈ [0,1]³, with w0 = 0 for a texel placed
 /// on the face and w0 = 1 for one placed under it. The cell is bounded by six bilinear patches
 /// (w = 0 bottom, w = 1 top, u = 0, u = 1, v = 0, v = 1); rays are intersected with them
-/// exactly (the ray–bilinear-patch test of pbrt-v4, `IntersectBilinearPatch`, Pharr, Jakob and
-/// Humphreys, "Physically Based Rendering", 4th ed., §6.6), in double precision.
+/// exactly (Reshetov's ray–bilinear-patch test, "Cool Patches", Ray Tracing Gems ch. 8, as in
+/// pbrt-v4's `IntersectBilinearPatch`, Pharr, Jakob and Humphreys, "Physically Based Rendering",
+/// 4th ed., §6.6), in double precision.
 ///
 /// Degenerate input is normal here: a triangle is a quad with two equal corners, a shell can be
 /// 1e-6 or 1e3 times as high as its face is wide, a face can be twisted. Every function stays
@@ -70,6 +71,9 @@ public:
     std::array<Vec3, 4> faceCorners(int face) const;
     /// Cell coordinates of the point (a, b) of face `face`.
     static Vec3 faceToCell(int face, double a, double b);
+    /// (p10 − p00) × (p01 − p11) of face `face`'s corners: the u² coefficient vector of the ray
+    /// test against it, kept per cell because it depends on the cell alone.
+    const Vec3& faceTwist(int face) const { return mTwist[std::size_t(face)]; }
 
     /// Inverts the map: the cell coordinates r with X(r) = x, by Newton's method with the
     /// analytic Jacobian started at `guess`, then (if that fails) from a 3×3×3 grid of starts
@@ -81,6 +85,7 @@ public:
 
 private:
     std::array<Vec3, 8> mCorners;
+    std::array<Vec3, 6> mTwist;
     double mSize = 0;
 };
 
