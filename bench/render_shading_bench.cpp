@@ -86,4 +86,15 @@ void BM_ReflectanceKernel(benchmark::State& state) {
 }
 BENCHMARK(BM_ReflectanceKernel)->Arg(40)->Arg(15);
 
+// What a ray segment pays once per light before its voxels: building the kernel.
+void BM_ReflectanceKernelSetup(benchmark::State& state) {
+    const Cases& c = cases();
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const std::size_t k = i++ & (kCases - 1);
+        benchmark::DoNotOptimize(ReflectanceKernel(c.light[k], c.view[k], 20));
+    }
+}
+BENCHMARK(BM_ReflectanceKernelSetup);
+
 }  // namespace

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -80,15 +81,18 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
     const double b = view.x() * view.y() * a;
     const Vector3d wk(1 + sign * view.x() * view.x() * a, sign * b, -sign * view.x());
     const Vector3d wj(b, sign + view.y() * view.y() * a, -view.y());
-    const std::array<const Vector3d*, 3> basis{&wk, &wj, &view};
-    // (pᵀSq) over S's entries: the diagonal ones once, the off-diagonal ones for both halves.
-    constexpr int kRow[6] = {0, 1, 2, 0, 0, 1}, kCol[6] = {0, 1, 2, 1, 2, 2};
-    for (int e = 0; e < 6; ++e)
-        for (int o = 0; o < 6; ++o) {
-            const Vector3d &p = *basis[std::size_t(kRow[o])], &q = *basis[std::size_t(kCol[o])];
-            const int x = kRow[e], y = kCol[e];
-            mProjection[std::size_t(6 * e + o)] = p[x] * q[y] + (x == y ? 0.0 : p[y] * q[x]);
-        }
+    // pᵀSq over S's entries: the diagonal ones once, the off-diagonal ones for both halves.
+    const std::array<std::pair<const Vector3d&, const Vector3d&>, 6> outputs{
+        {{wk, wk}, {wj, wj}, {view, view}, {wk, wj}, {wk, view}, {wj, view}}};
+    for (std::size_t o = 0; o < 6; ++o) {
+        const auto& [p, q] = outputs[o];
+        mProjection[o] = p.x() * q.x();
+        mProjection[6 + o] = p.y() * q.y();
+        mProjection[12 + o] = p.z() * q.z();
+        mProjection[18 + o] = p.x() * q.y() + p.y() * q.x();
+        mProjection[24 + o] = p.x() * q.z() + p.z() * q.x();
+        mProjection[30 + o] = p.y() * q.z() + p.z() * q.y();
+    }
     mLight = Eigen::Vector3f(float(light.dot(wk)), float(light.dot(wj)), float(light.dot(view)));
     // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
     mCosCutoff = float(shininess <= 0        ? 0.0
