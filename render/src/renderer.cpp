@@ -387,8 +387,12 @@ private:
             }
         }
         const double shadowRefresh = std::clamp(mOptions.shadowRefresh, 1e-6, 1.0);
-        const auto run = [&](int level, bool record) {
+        const double reuseWeight = std::max(mOptions.reflectanceReuseWeight, 0.0);
+        const auto run = [&](int level, bool record, double blendWeight) {
             Result r;
+            std::array<octree::ReflectanceFactors, 16> lastReflectance;
+            std::array<bool, 16> haveReflectance{};
+            double reusedShare = 0;
             std::array<double, 16> shadowT{};
             std::array<double, 16> shadowAt{};  // local transmittance when the shadow was taken
             std::array<bool, 16> shadowValid{};
@@ -399,6 +403,8 @@ private:
                     const double sigma = texel.tau * double(voxel.density) * detail::normalizedArea(sMatrix, dir);
                     const double alpha = -std::expm1(-sigma * ds);
                     if (!(alpha > 0)) return true;
+                    const double share = startT * r.transmittance * alpha * blendWeight;
+                    const bool reuse = share < reuseWeight && reusedShare + share <= 10 * reuseWeight;
                     const double sm = s + 0.5 * ds;
                     const Vec3 pt = p0 + sm * dir;
                     const Vec3 rc(pt.x() / surface.repeatU, pt.y() / surface.repeatV, pt.z());
@@ -464,11 +470,17 @@ private:
                         if (shadowT[i] <= 0) continue;
                         Vec3 lr = sl.lr;
                         if (sl.directional ? !sl.usable : !referenceLight(lw, lr)) continue;
-                        ++counters.reflectance;
-                        const auto f = sl.kernel ? (*sl.kernel)(sMatrix)
-                                       : mOptions.shading == ShadingMode::Fast
-                                           ? reflectanceFast(sMatrix, lr, view, m.shininess)
-                                           : reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
+                        octree::ReflectanceFactors& f = lastReflectance[i];
+                        if (reuse && haveReflectance[i]) {
+                            reusedShare += share;
+                        } else {
+                            ++counters.reflectance;
+                            f = sl.kernel ? (*sl.kernel)(sMatrix)
+                                : mOptions.shading == ShadingMode::Fast
+                                    ? reflectanceFast(sMatrix, lr, view, m.shininess)
+                                    : reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
+                            haveReflectance[i] = true;
+                        }
                         lk += shadowT[i] * e.cwiseProduct(m.diffuse.cwiseProduct(albedo) * f.diffuse + m.specular * f.specular);
                     }
                     r.radiance += r.transmittance * alpha * lk;
@@ -479,11 +491,11 @@ private:
         };
         Result result;
         if (fineWeight >= 1) {
-            result = run(choice.fine, false);
+            result = run(choice.fine, false, 1.0);
         } else {
-            result = run(choice.coarse, mOptions.shareShadowRays);
+            result = run(choice.coarse, mOptions.shareShadowRays, 1 - fineWeight);
             if (fineWeight > 0) {
-                const Result fine = run(choice.fine, false);
+                const Result fine = run(choice.fine, false, fineWeight);
                 const double w = fineWeight;
                 result.radiance = (1 - w) * result.radiance + w * fine.radiance;
                 result.transmittance = (1 - w) * result.transmittance + w * fine.transmittance;

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include <iostream>
+#include <numbers>
 #include <random>
 
 using namespace vtex::render;
@@ -346,6 +347,42 @@ TEST(Render, SkippedBlendLevelsMatchTheFullBlend) {
     EXPECT_NEAR(meanAbs(skipped.image) / meanAbs(exact.image), 1.0, 0.005);
     EXPECT_LT(skipped.stats.voxelsVisited, exact.stats.voxelsVisited);
     EXPECT_NEAR(exact.stats.meanLevel(), skipped.stats.meanLevel(), 0.05);
+}
+
+// Voxels with a tiny share of the pixel reuse the march's last reflectance: each pixel moves by
+// at most the reused shares' budget (10 × reflectanceReuseWeight) times the largest radiance a
+// voxel can reflect, E·(kd·max albedo/π + ks·(n+2)/2π), and fewer reflectances are evaluated.
+TEST(Render, ReusedReflectanceStaysWithinItsBound) {
+    // Fibres leaning every way, so that neighbouring voxels reflect differently.
+    Scene scene = grassPlane(64);
+    std::mt19937 rng(3);
+    std::normal_distribution<float> g(0, 1);
+    vtex::octree::Octree tree = *scene.texels[0].octree;
+    for (auto& level : tree.levels)
+        for (auto& node : level) {
+            Eigen::Vector4f q(g(rng), g(rng), g(rng), g(rng));
+            q = q.normalized() * (q.w() < 0 ? -1.0f : 1.0f);
+            node.data.rotation = {q.x(), q.y(), q.z(), q.w()};
+        }
+    scene.texels[0].octree = std::make_shared<const vtex::octree::Octree>(std::move(tree));
+    RenderOptions o;
+    o.reflectanceReuseWeight = 0;
+    const RenderResult exact = renderQuiet(scene, o);
+    const RenderResult reused = renderQuiet(scene, {});
+    const Material& m = scene.texels[0].material;
+    const double e = scene.lights[0].color.maxCoeff();
+    const double largest = e * (m.diffuse.maxCoeff() * 0.8 / std::numbers::pi +
+                                m.specular.maxCoeff() * (m.shininess + 2) / (2 * std::numbers::pi));
+    const double bound = 10 * RenderOptions{}.reflectanceReuseWeight * largest;
+    double worst = 0;
+    for (std::size_t i = 0; i < exact.image.rgba.size(); ++i)
+        if (i % 4 != 3) worst = std::max(worst, double(std::abs(exact.image.rgba[i] - reused.image.rgba[i])));
+    std::cout << "reflectance reuse: worst pixel " << worst << " (bound " << bound << "), RMSE "
+              << rmse(exact.image, reused.image) << ", evaluations " << reused.stats.reflectanceEvaluations << " vs "
+              << exact.stats.reflectanceEvaluations << "\n";
+    EXPECT_GT(worst, 0);
+    EXPECT_LE(worst, bound);
+    EXPECT_LT(reused.stats.reflectanceEvaluations, 0.9 * double(exact.stats.reflectanceEvaluations));
 }
 
 // A shadow query per absorbing voxel (shadowRefresh 1) is the limit the reuse of queries along

@@ -51,6 +51,12 @@ struct RenderOptions {
     /// A level whose blend weight is below this is not marched, its weight going to the other
     /// level (docs/render.md, "Levels"); 0: both levels of every blend are marched (exact).
     double blendCutoff = 0.1;
+    /// A voxel whose share of the pixel (transmittance in front of it × its opacity × its level's
+    /// blend weight) is below this reuses the reflectance the march last evaluated for that
+    /// light instead of evaluating its own, as long as the shares reused along the march add up
+    /// to at most 10× this: the pixel moves by at most that sum times the largest reflected
+    /// radiance (docs/render.md, "Shading"). 0: every voxel evaluates its own (exact).
+    double reflectanceReuseWeight = 1e-3;
     /// Along a march, a voxel takes a new shadow query once the march's transmittance has fallen
     /// below this fraction of what it was at the last query, and reuses the last one otherwise;
     /// in (0, 1]. Nearer 1: deeper voxels get their own, darker shadows — less error against the
