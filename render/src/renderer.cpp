@@ -109,14 +109,14 @@ public:
             }
             const CellSpan& span = hit->span;
             if (span.faceIn == 0 && hit->t <= span.tIn) {  // the base surface, seen from below or beside
-                opaque(state, hit->t, shadeFloor(prim, surface, span.rIn, d, hit->t, counters));
+                opaque(state, hit->t, shadeFloor(prim, surface, span.rIn, d, hit->t, state.transmittance, counters));
                 break;
             }
             const auto rIn = entryCoords(prim, *hit, o, d, -1, Vec3::Zero());
             if (rIn) marchSpan(prim, surface, *rIn, span.rOut, hit->t, span.tOut, state, counters);
             if (state.transmittance <= kTransmittanceCutoff) break;
             if (span.faceOut == 0) {
-                opaque(state, span.tOut, shadeFloor(prim, surface, span.rOut, d, span.tOut, counters));
+                opaque(state, span.tOut, shadeFloor(prim, surface, span.rOut, d, span.tOut, state.transmittance, counters));
                 break;
             }
             tNear = span.tOut;
@@ -131,13 +131,25 @@ private:
         state.transmittance = 0;
     }
 
+    // The base surface at cell coordinates r, seen through transmittance `seenThrough`. Its
+    // shadow rays are exact, except where it is seen through less than
+    // RenderOptions::exactFloorShadowAbove: there the cell's transmittance lattice answers (as it
+    // does for voxels), which moves the pixel by at most seenThrough × the floor's direct light.
     Color shadeFloor(const Prim& prim, const SurfaceRuntime& surface, const Vec3& r, const Vec3& d, double t,
-                     Counters& counters) const {
+                     double seenThrough, Counters& counters) const {
         const Vec3 x = prim.cell.map(Vec3(r.x(), r.y(), 0));
         const auto bottom = prim.cell.faceCorners(0);
         const Vec3 ng = geometricNormal(bottom, r.x(), r.y(), prim.n);
         const Vec3 n = shadingNormal(prim.n, r.x(), r.y(), ng);
-        return shadeSurface(x, n, ng, -d, surface.material, std::min(surface.height, patchSize(prim)), t, counters);
+        const double scale = std::min(surface.height, patchSize(prim));
+        if (seenThrough >= mOptions.exactFloorShadowAbove) return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters);
+        // Just above the floor, where the lattice's near march starts inside the cell.
+        const Vec3 rAbove(r.x(), r.y(), 1e-4);
+        const int primIndex = int(&prim - mTracer.prims().data());
+        return detail::shadePhong(mScene.lights, x, n, ng, -d, surface.material, Color::Ones(), scale,
+                                  [&](const Vec3& origin, const Vec3& l, double distance) {
+                                      return shadowTransmittance(origin, l, distance, mConeSpread * t, primIndex, rAbove, counters);
+                                  });
     }
 
     Color shadeSurface(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& view, const Material& m, double scale,

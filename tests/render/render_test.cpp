@@ -385,6 +385,30 @@ TEST(Render, ReusedReflectanceStaysWithinItsBound) {
     EXPECT_LT(reused.stats.reflectanceEvaluations, 0.9 * double(exact.stats.reflectanceEvaluations));
 }
 
+// Floors seen through less than exactFloorShadowAbove take their shadows from the cell's lattice:
+// each pixel moves by at most that transmittance times the floor's largest direct radiance,
+// E·(kd/π + ks·(n+2)/2π), and the exact shadow rays' marches are saved.
+TEST(Render, DimFloorsTakeLatticeShadowsWithinTheirBound) {
+    Scene scene = grassPlane(64);
+    scene.texels[0].tau = 4;  // dense columns: many floor points are seen through little
+    RenderOptions o;
+    o.exactFloorShadowAbove = 0;
+    const RenderResult exact = renderQuiet(scene, o);
+    const RenderResult dim = renderQuiet(scene, {});
+    const Material& m = scene.surfaces[0].material;
+    const double largest = scene.lights[0].color.maxCoeff() *
+                           (m.diffuse.maxCoeff() / std::numbers::pi + m.specular.maxCoeff() * (m.shininess + 2) / (2 * std::numbers::pi));
+    const double bound = RenderOptions{}.exactFloorShadowAbove * largest;
+    double worst = 0;
+    for (std::size_t i = 0; i < exact.image.rgba.size(); ++i)
+        if (i % 4 != 3) worst = std::max(worst, double(std::abs(exact.image.rgba[i] - dim.image.rgba[i])));
+    std::cout << "dim floors through the lattice: worst pixel " << worst << " (bound " << bound << "), RMSE "
+              << rmse(exact.image, dim.image) << ", blocks " << dim.stats.voxelsVisited << " vs " << exact.stats.voxelsVisited << "\n";
+    EXPECT_GT(worst, 0);
+    EXPECT_LE(worst, bound);
+    EXPECT_LT(dim.stats.voxelsVisited, exact.stats.voxelsVisited);
+}
+
 // A shadow query per absorbing voxel (shadowRefresh 1) is the limit the reuse of queries along
 // a march approximates: refreshing sooner (0.7) must come closer to it than the default (0.25),
 // with more queries.

@@ -57,6 +57,11 @@ struct RenderOptions {
     /// to at most 10× this: the pixel moves by at most that sum times the largest reflected
     /// radiance (docs/render.md, "Shading"). 0: every voxel evaluates its own (exact).
     double reflectanceReuseWeight = 1e-3;
+    /// The base surface of a texel cell, seen through a transmittance at least this, casts exact
+    /// shadow rays; seen through less, its shadows come from the cell's transmittance lattice
+    /// (as a voxel's do), which moves the pixel by at most that transmittance times the floor's
+    /// direct light (docs/render.md, "Shadows"). 0: always exact.
+    double exactFloorShadowAbove = 0.05;
     /// Along a march, a voxel takes a new shadow query once the march's transmittance has fallen
     /// below this fraction of what it was at the last query, and reuses the last one otherwise;
     /// in (0, 1]. Nearer 1: deeper voxels get their own, darker shadows — less error against the
