@@ -78,8 +78,8 @@ std::vector<std::uint8_t> exactDistances(const std::vector<std::uint32_t>& index
                     int best = line[std::size_t(i)];
                     for (int k = 1; k < best && k < n; ++k) {
                         for (const int j : {i - k, i + k}) {
-                            int w = j;
-                            if (axis < 2) w = ((j % n) + n) % n;
+                            int w = j;  // |j − i| = k < n: one period at most
+                            if (axis < 2) w = j < 0 ? j + n : j >= n ? j - n : j;
                             else if (j < 0 || j >= n) continue;
                             best = std::min(best, std::max(k, int(line[std::size_t(w)])));
                         }
