@@ -63,7 +63,6 @@ constexpr double kExactLatticeSteps = 2.0;
 
 struct TexelRuntime {
     std::unique_ptr<const MarchVolume> volume;
-    int maxLevel = 0;
     double tau = 1;
     Material material;
 };
@@ -142,21 +141,19 @@ private:
         const Vec3 ng = geometricNormal(bottom, r.x(), r.y(), prim.n);
         const Vec3 n = shadingNormal(prim.n, r.x(), r.y(), ng);
         const double scale = std::min(surface.height, patchSize(prim));
-        if (seenThrough >= mOptions.exactFloorShadowAbove) return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters);
-        // Just above the floor, where the lattice's near march starts inside the cell.
-        const Vec3 rAbove(r.x(), r.y(), 1e-4);
-        const int primIndex = int(&prim - mTracer.prims().data());
-        return detail::shadePhong(mScene.lights, x, n, ng, -d, surface.material, Color::Ones(), scale,
-                                  [&](const Vec3& origin, const Vec3& l, double distance) {
-                                      return shadowTransmittance(origin, l, distance, mConeSpread * t, primIndex, rAbove, counters);
-                                  });
+        // The hint, just above the floor where the lattice's near march starts inside the cell,
+        // is what lets a query use the lattice.
+        const int hintPrim = seenThrough < mOptions.exactFloorShadowAbove ? int(&prim - mTracer.prims().data()) : -1;
+        return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters, hintPrim, Vec3(r.x(), r.y(), 1e-4));
     }
 
+    // An opaque surface point; its shadow queries start in cell `hintPrim` at `hintR` when that
+    // is given (see shadowTransmittance).
     Color shadeSurface(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& view, const Material& m, double scale,
-                       double t, Counters& counters) const {
+                       double t, Counters& counters, int hintPrim = -1, const Vec3& hintR = Vec3::Zero()) const {
         return detail::shadePhong(mScene.lights, x, n, ng, view, m, Color::Ones(), scale,
                                   [&](const Vec3& origin, const Vec3& l, double distance) {
-                                      return shadowTransmittance(origin, l, distance, mConeSpread * t, -1, Vec3::Zero(), counters);
+                                      return shadowTransmittance(origin, l, distance, mConeSpread * t, hintPrim, hintR, counters);
                                   });
     }
 
@@ -165,17 +162,18 @@ private:
     // (world units, held constant along the shadow ray).
     double shadowTransmittance(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim,
                                const Vec3& hintR, Counters& counters) const {
-        // A directional light and a point inside a texel cell: the cell's transmittance lattice.
-        if (mOptions.shadowCacheResolution > 0 && std::isinf(tMax)) {
-            const int slot = mLightCache.slot(l);
-            if (slot >= 0) {
-                if (hintPrim >= 0 && mLightCache.grid(hintPrim).nw > 0) {
-                    ++counters.shadow;
-                    return nearAndCachedShadow(slot, hintPrim, hintR, l, width, counters);
-                }
-            }
-        }
+        if (const int slot = latticeSlot(l, tMax, hintPrim); slot >= 0)
+            return nearAndCachedShadow(slot, hintPrim, hintR, l, width, counters);
         return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters);
+    }
+
+    // The slot of the transmittance lattice that answers a shadow query toward l (up to tMax)
+    // from inside primitive `prim` (−1: none): a directional light and a point inside a texel
+    // cell that has a lattice.
+    int latticeSlot(const Vec3& l, double tMax, int prim) const {
+        if (mOptions.shadowCacheResolution <= 0 || !std::isinf(tMax) || prim < 0) return -1;
+        const int slot = mLightCache.slot(l);  // −1 also when there is no lattice at all
+        return slot >= 0 && mLightCache.grid(prim).nw > 0 ? slot : -1;
     }
 
     // A query at cell coordinates r: the exact transmittance over the first kExactLatticeSteps
@@ -196,6 +194,7 @@ private:
     };
     double nearAndCachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, double width,
                                Counters& counters, const SpanFrame* span = nullptr) const {
+        ++counters.shadow;
         const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
         const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
@@ -226,9 +225,7 @@ private:
             floor = true;  // the step reaches the base surface, which blocks
         }
         const Vec3 p1 = p0 + step * lr;
-        const double scale = span ? span->scale : localScale(prim.cell, r, surface);
-        const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
-        const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
+        const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim.cell, r, surface)));
         const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tau, p0, p1, level, kTransmittanceCutoff);
         counters.voxels += near.blocks;
         if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
@@ -292,14 +289,19 @@ private:
                 double transmittance) {
                 const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
                 const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
-                const double scale = localScale(prim.cell, 0.5 * (rIn + rOut), surface);
-                const LevelChoice choice = chooseLevel(width / scale, mOptions.lodBias, texel.maxLevel);
-                const int level = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
+                const int level = shadowLevel(texel, width / localScale(prim.cell, 0.5 * (rIn + rOut), surface));
                 const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tau, p0, p1, level,
                                                                     kTransmittanceCutoff / transmittance);
                 counters.voxels += seg.blocks;
                 return seg.transmittance;
             });
+    }
+
+    // A shadow march takes the single level nearest the cone's width (reference units): shadows
+    // are not blended.
+    int shadowLevel(const TexelRuntime& texel, double width) const {
+        const LevelChoice choice = chooseLevel(width, mOptions.lodBias, texel.volume->maxLevel());
+        return choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
     }
 
     static Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
@@ -321,14 +323,15 @@ private:
         const Vec3 rMid = 0.5 * (rIn + rOut);
         const double scale = localScale(prim.cell, rMid, surface);
         const double tMid = 0.5 * (tIn + tOut);
-        const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, texel.maxLevel);
+        const int maxLevel = texel.volume->maxLevel();
+        const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
         // A blend weight below mOptions.blendCutoff goes to the other level, which is then the
         // only one marched: the image moves by at most that weight times the difference of the
         // two levels' results (bounded by the test SkippedBlendLevelsMatchTheFullBlend).
         double fineWeight = choice.fineWeight;
         if (fineWeight > 0 && fineWeight < mOptions.blendCutoff) fineWeight = 0;
         if (fineWeight > 1 - mOptions.blendCutoff) fineWeight = 1;
-        if (counters.histogram.size() < std::size_t(texel.maxLevel + 1)) counters.histogram.resize(std::size_t(texel.maxLevel + 1), 0.0);
+        if (counters.histogram.size() < std::size_t(maxLevel + 1)) counters.histogram.resize(std::size_t(maxLevel + 1), 0.0);
         if (fineWeight < 1) counters.histogram[std::size_t(choice.coarse)] += 1 - fineWeight;
         if (fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += fineWeight;
 
@@ -393,10 +396,7 @@ private:
             lightAt(mScene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
             sl.usable = referenceLight(sl.lw, sl.lr);
             if (sl.usable && mOptions.shading == ShadingMode::Fast) sl.kernel.emplace(sl.lr, view, m.shininess);
-            if (sl.usable && mOptions.shadowCacheResolution > 0) {
-                const int slot = mLightCache.slot(sl.lw);  // −1 also when there is no lattice at all
-                if (slot >= 0 && mLightCache.grid(primIndex).nw > 0) sl.latticeSlot = slot;
-            }
+            if (sl.usable) sl.latticeSlot = latticeSlot(sl.lw, INFINITY, primIndex);
         }
         const double shadowRefresh = std::clamp(mOptions.shadowRefresh, 1e-6, 1.0);
         const double reuseWeight = std::max(mOptions.reflectanceReuseWeight, 0.0);
@@ -471,7 +471,6 @@ private:
                                 const Vec3 rc = cellPoint();
                                 const double width = kShadowConeScale * mConeSpread * (tIn + (tOut - tIn) * (sm / length));
                                 if (sl.latticeSlot >= 0) {
-                                    ++counters.shadow;
                                     const SpanFrame frame{sl.lr, scale};
                                     shadowT[i] = nearAndCachedShadow(sl.latticeSlot, primIndex, rc, lw, width, counters, &frame);
                                 } else {
@@ -558,7 +557,6 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
         if (tree->levels.empty() || tree->levels[0].empty())
             throw InputError(def.volume, "octree has no root");
         t.volume = std::make_unique<const MarchVolume>(std::move(tree));
-        t.maxLevel = t.volume->maxLevel();
         t.tau = def.tau;
         t.material = def.material;
     }
