@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <vtex/octree/voxel.h>
 #include <vtex/render/texel_march.h>
 
 #include <algorithm>
@@ -45,6 +46,16 @@ TEST(March, CursorFindsWhatTheLookupFromTheRootFinds) {
         });
     }
     EXPECT_GT(compared, 1000);
+}
+
+// The grid's table-driven Morton index is the octree's key, for every voxel of the deepest grid.
+TEST(March, GridMortonIndexIsTheOctreeKey) {
+    std::uint64_t mismatches = 0;
+    for (std::uint32_t z = 0; z < 256; ++z)
+        for (std::uint32_t y = 0; y < 256; ++y)
+            for (std::uint32_t x = 0; x < 256; ++x)
+                mismatches += LevelGrid::morton(x, y, z) != vtex::octree::mortonEncode(x, y, z);
+    EXPECT_EQ(mismatches, 0u);
 }
 
 // The dense-grid walk (marchGrid, with its empty-space leaps) visits the same voxels over the
