@@ -78,7 +78,7 @@ SggxMatrix toSggx(const Eigen::Matrix3d& s) { return {s(0, 0), s(1, 1), s(2, 2),
 }  // namespace
 
 // One kernel per (l, v, shininess) applied to many S equals the method computed plainly per
-// call, and equals reflectanceFast. Tolerance: the kernel's lattice sum runs in single
+// call (reflectanceFast is one kernel used once). Tolerance: the kernel's lattice sum runs in single
 // precision, whose rounding is relative to the terms' scale (1/π, (n+2)/2π) rather than to
 // their sum, which cancellation in N·l near grazing can make 1e3 times smaller; and it drops
 // Phong terms below 1e-6 of the lobe's peak, whose sum is below 1e-6 of the specular scale.
@@ -93,10 +93,7 @@ TEST(Shading, KernelEqualsThePlainMethodOnNeedlesAndDiscs) {
             const ReflectanceKernel kernel(l, v, shininess);
             for (const Eigen::Matrix3d& s : matrices) {
                 const ReflectanceFactors got = kernel(toSggx(s));
-                const ReflectanceFactors fast = reflectanceFast(toSggx(s), l, v, shininess);
                 const ReflectanceFactors want = plainVndfLattice(s, l, v, shininess, 16);
-                EXPECT_EQ(got.diffuse, fast.diffuse);
-                EXPECT_EQ(got.specular, fast.specular);
                 const double specularScale = (shininess + 2) / (2 * kPi);
                 const double dErr = std::abs(got.diffuse - want.diffuse) / (want.diffuse + 1e-3 / kPi);
                 const double sErr = std::max(std::abs(got.specular - want.specular) - 1e-6 * specularScale, 0.0) /
