@@ -65,7 +65,8 @@ RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format,
 
 /// Checks the element counts an OFF/PLY/STL header claims against the file's size, so that
 /// OpenMesh never reserves memory for elements that are not there, and returns the bytes
-/// OpenMesh may read (a PLY header rewritten canonically). Throws InputError.
+/// OpenMesh may read (for PLY, every value checked and rewritten as a canonical binary PLY).
+/// Throws InputError.
 std::string precheckOpenMeshInput(std::string_view bytes, const std::string& format,
                            const std::filesystem::path& file, const IngestOptions& options);
 

@@ -1,10 +1,12 @@
-// OFF, PLY and STL through OpenMesh 9, behind a pre-check of what each header claims.
+// OFF, PLY and STL through OpenMesh 9, behind a pre-check of what each file claims.
 //
-// OpenMesh's readers trust their headers: they reserve memory for the element counts an OFF
+// OpenMesh's readers trust their input: they reserve memory for the element counts an OFF
 // or PLY header states and size a vector by each face's stated corner count. So before
 // OpenMesh sees a byte, precheckOpenMeshInput() checks that the counts fit in the bytes
-// present and walks the records that carry counts (OFF faces, PLY lists), bounding each by
-// what the file can hold. Invalid vertex indices are skipped by OpenMesh's importer.
+// present and walks the OFF records that carry counts, bounding each by what the file can
+// hold. A PLY file is read whole here and handed to OpenMesh as a canonical binary PLY of
+// just the values the mesh needs (see transcodePly). Invalid vertex indices are skipped by
+// OpenMesh's importer.
 #include "detail.h"
 
 #include <vtex/core/error.h>
@@ -13,8 +15,11 @@
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 
 #include <algorithm>
+#include <bit>
 #include <charconv>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <sstream>
 
 namespace vtex::ingest::detail {
@@ -147,20 +152,40 @@ void precheckOff(std::string_view bytes, const fs::path& file, const IngestOptio
     }
 }
 
-int plyTypeSize(std::string_view type) {
-    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-    if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
-        type == "float32")
-        return 4;
-    if (type == "double" || type == "float64") return 8;
+enum class PlyScalar { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64, Invalid };
+
+PlyScalar plyScalar(std::string_view type) {
+    if (type == "char" || type == "int8") return PlyScalar::Int8;
+    if (type == "uchar" || type == "uint8") return PlyScalar::UInt8;
+    if (type == "short" || type == "int16") return PlyScalar::Int16;
+    if (type == "ushort" || type == "uint16") return PlyScalar::UInt16;
+    if (type == "int" || type == "int32") return PlyScalar::Int32;
+    if (type == "uint" || type == "uint32") return PlyScalar::UInt32;
+    if (type == "float" || type == "float32") return PlyScalar::Float32;
+    if (type == "double" || type == "float64") return PlyScalar::Float64;
+    return PlyScalar::Invalid;
+}
+int plySize(PlyScalar t) {
+    switch (t) {
+        case PlyScalar::Int8: case PlyScalar::UInt8: return 1;
+        case PlyScalar::Int16: case PlyScalar::UInt16: return 2;
+        case PlyScalar::Int32: case PlyScalar::UInt32: case PlyScalar::Float32: return 4;
+        case PlyScalar::Float64: return 8;
+        case PlyScalar::Invalid: break;
+    }
     return 0;
+}
+bool plyIsInteger(PlyScalar t) { return t != PlyScalar::Float32 && t != PlyScalar::Float64; }
+const char* plyName(PlyScalar t) {
+    static constexpr const char* names[] = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "float64", "?"};
+    return names[int(t)];
 }
 
 struct PlyProperty {
-    int size = 0;       // scalar size, or list item size
-    int countSize = 0;  // 0 for a scalar
-    std::string countType;
+    std::string name;
+    PlyScalar type = PlyScalar::Invalid;   // the scalar's type, or a list's item type
+    PlyScalar count = PlyScalar::Invalid;  // a list's count type; Invalid for a scalar
+    bool isList() const { return count != PlyScalar::Invalid; }
 };
 struct PlyElement {
     std::string name;
@@ -168,31 +193,129 @@ struct PlyElement {
     std::vector<PlyProperty> properties;
 };
 
-std::uint64_t readPlyCount(const unsigned char* p, int size, bool bigEndian, std::string_view type) {
-    unsigned char b[4] = {0, 0, 0, 0};
-    std::memcpy(b, p, std::size_t(size));
-    if (bigEndian) std::reverse(b, b + size);
-    if (size == 1) return (type == "char" || type == "int8") ? std::uint64_t(std::int8_t(b[0]) < 0 ? ~0ull : b[0]) : b[0];
-    if (size == 2) {
-        std::uint16_t v;
-        std::memcpy(&v, b, 2);
-        if ((type == "short" || type == "int16") && std::int16_t(v) < 0) return ~0ull;
-        return v;
+// The values of a PLY body, one at a time, each checked against its declared type: ASCII
+// tokens must be whole numbers of that type (an integer type's range included), binary
+// values must be present. Errors name the element and record being read.
+class PlyValues {
+public:
+    PlyValues(std::string_view body, bool ascii, bool bigEndian, const fs::path& file)
+        : mBody(body), mAscii(ascii), mBig(bigEndian), mFile(file) {}
+
+    void at(const std::string& element, std::uint64_t record) {
+        mElement = &element;
+        mRecord = record;
     }
-    std::uint32_t v;
-    std::memcpy(&v, b, 4);
-    if ((type == "int" || type == "int32") && std::int32_t(v) < 0) return ~0ull;
-    return v;
+    double next(PlyScalar type) { return mAscii ? nextToken(type) : nextBinary(type); }
+    // A list's item count, bounded by the bytes left (an item takes at least one byte).
+    std::uint64_t listCount(PlyScalar countType, PlyScalar itemType) {
+        const double n = next(countType);
+        if (n < 0) fail("negative list count");
+        const std::uint64_t count = std::uint64_t(n);
+        const std::uint64_t left = mBody.size() - mAt;
+        if (count > left / std::uint64_t(mAscii ? 1 : plySize(itemType)))
+            fail("list of " + std::to_string(count) + " items runs past the end");
+        return count;
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& what) const {
+        throw InputError(mFile, "PLY '" + *mElement + "' record " + std::to_string(mRecord) + ": " + what);
+    }
+    double nextToken(PlyScalar type) {
+        while (mAt < mBody.size() && isSpace(mBody[mAt])) ++mAt;
+        std::size_t end = mAt;
+        while (end < mBody.size() && !isSpace(mBody[end])) ++end;
+        std::string_view token = mBody.substr(mAt, end - mAt);
+        mAt = end;
+        if (token.empty()) fail("truncated (missing values)");
+        const std::string_view shown = token.substr(0, 40);
+        if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
+        const char* const first = token.data();
+        const char* const last = first + token.size();
+        if (plyIsInteger(type)) {
+            std::int64_t value = 0;
+            const auto [stop, ec] = std::from_chars(first, last, value);
+            const std::int64_t bits = 8 * plySize(type);
+            const bool isSigned = type == PlyScalar::Int8 || type == PlyScalar::Int16 || type == PlyScalar::Int32;
+            const std::int64_t lo = isSigned ? -(std::int64_t(1) << (bits - 1)) : 0;
+            const std::int64_t hi = isSigned ? (std::int64_t(1) << (bits - 1)) - 1 : (std::int64_t(1) << bits) - 1;
+            if (ec != std::errc() || stop != last || value < lo || value > hi)
+                fail("'" + std::string(shown) + "' does not read as " + plyName(type));
+            return double(value);
+        }
+        double value = 0;
+        const auto [stop, ec] = std::from_chars(first, last, value);
+        if ((ec != std::errc() && ec != std::errc::result_out_of_range) || stop != last)
+            fail("'" + std::string(shown) + "' is not a number");
+        // from_chars leaves the value alone when out of range; strtod gives ±inf or 0 then.
+        if (ec == std::errc::result_out_of_range) value = std::strtod(std::string(token).c_str(), nullptr);
+        return value;
+    }
+    double nextBinary(PlyScalar type) {
+        const int size = plySize(type);
+        if (mBody.size() - mAt < std::size_t(size)) fail("truncated (the data ends inside it)");
+        unsigned char b[8];
+        std::memcpy(b, mBody.data() + mAt, std::size_t(size));
+        mAt += std::size_t(size);
+        if (mBig) std::reverse(b, b + size);
+        auto load = [&b]<typename T>(T) {
+            T v;
+            std::memcpy(&v, b, sizeof(T));
+            return double(v);
+        };
+        switch (type) {
+            case PlyScalar::Int8: return load(std::int8_t{});
+            case PlyScalar::UInt8: return load(std::uint8_t{});
+            case PlyScalar::Int16: return load(std::int16_t{});
+            case PlyScalar::UInt16: return load(std::uint16_t{});
+            case PlyScalar::Int32: return load(std::int32_t{});
+            case PlyScalar::UInt32: return load(std::uint32_t{});
+            case PlyScalar::Float32: return load(float{});
+            case PlyScalar::Float64: return load(double{});
+            case PlyScalar::Invalid: break;
+        }
+        return 0;
+    }
+
+    std::string_view mBody;
+    std::size_t mAt = 0;
+    bool mAscii, mBig;
+    const fs::path& mFile;
+    const std::string* mElement = nullptr;
+    std::uint64_t mRecord = 0;
+};
+
+// A double beyond float's range becomes ±inf (the cast itself would be undefined); the
+// mesh's repair then refuses the coordinate by name.
+float toFloat(double value) {
+    if (value > double(std::numeric_limits<float>::max())) return std::numeric_limits<float>::infinity();
+    if (value < -double(std::numeric_limits<float>::max())) return -std::numeric_limits<float>::infinity();
+    return float(value);
 }
 
-// Returns the file with its header rewritten canonically (known lines only, '\n' endings):
-// OpenMesh never parses the original header.
-std::string precheckPly(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
-    // OpenMesh's PLY header parser loops forever on a header it does not expect (the fuzzer
-    // found two: a stray line with '\r', and "end_header" glued to a property name). So the
-    // header is held to the grammar here (printable ASCII, known keywords with their token
-    // counts, "end_header" alone on its line), lines that are not PLY keywords are dropped
-    // as comments (Blender 2.4 wrote such lines), and OpenMesh reads the rewritten header.
+template <typename T>
+void appendLittleEndian(std::string& out, T value) {
+    char b[sizeof(T)];
+    std::memcpy(b, &value, sizeof(T));
+    if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + sizeof(T));
+    out.append(b, sizeof(T));
+}
+
+// Returns the mesh as a canonical binary PLY that OpenMesh reads without surprises: vertex
+// x, y, z (and nx, ny, nz when all three are there) as float32, then faces as an int32 count
+// (OpenMesh takes no unsigned count type) and int32 indices, -1 for an index that names no
+// vertex (OpenMesh skips such faces).
+//
+// OpenMesh's PLY reader cannot be given the file itself. Its header parser loops forever on a
+// header it does not expect (the fuzzer found a stray line with '\r', "end_header" glued to a
+// property name, an unparsable version). Its ASCII body reader extracts values with
+// operator>> in whatever order its property table says, reads a list other than the face
+// indices as one token, and keeps going after a failed extraction; so one token out of place
+// became a face's corner count and a loop of 4·10⁹ push_backs (fuzzer, found in CI). So every
+// value is read and checked here, in the file's order, and OpenMesh only sees what was
+// checked. Header lines that are not PLY keywords are dropped as comments (Blender 2.4 wrote
+// such lines).
+std::string transcodePly(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
     if (bytes.substr(0, 4) != "ply\n" && bytes.substr(0, 5) != "ply\r\n")
         throw InputError(file, "not a PLY file (no 'ply' magic line)");
     std::size_t headerEnd = std::string_view::npos;
@@ -204,11 +327,10 @@ std::string precheckPly(std::string_view bytes, const fs::path& file, const Inge
         }
     }
     if (headerEnd == std::string_view::npos) throw InputError(file, "PLY: no end_header line");
-    std::size_t dataStart = bytes.find('\n', headerEnd) + 1;
+    const std::size_t dataStart = bytes.find('\n', headerEnd) + 1;
     std::string format;
     std::vector<PlyElement> elements;
-    std::string canonical;
-    std::string_view header = bytes.substr(0, headerEnd);
+    const std::string_view header = bytes.substr(0, headerEnd);
     for (char c : header)
         if (!(c == '\n' || c == '\r' || c == '\t' || (c >= 0x20 && c < 0x7f)))
             throw InputError(file, "PLY header: not printable ASCII");
@@ -222,45 +344,34 @@ std::string precheckPly(std::string_view bytes, const fs::path& file, const Inge
         for (std::string_view t = line.next(); !t.empty(); t = line.next()) tokens.push_back(t);
         if (tokens.empty()) continue;
         const std::string_view keyword = tokens[0];
-        const bool known = keyword == "ply" || keyword == "format" || keyword == "comment" || keyword == "obj_info" ||
-                           keyword == "element" || keyword == "property";
-        if (!known) continue;
-        if (keyword != "comment" && keyword != "obj_info") {
-            for (const auto& t : tokens) canonical.append(t).push_back(' ');
-            canonical.back() = '\n';
-        }
         const bool ok = keyword == "ply" ? tokens.size() == 1
                       : keyword == "format" ? tokens.size() == 3
                       : keyword == "comment" || keyword == "obj_info" ? true
                       : keyword == "element" ? tokens.size() == 3
                       : keyword == "property" ? (tokens.size() == 3 || (tokens.size() == 5 && tokens[1] == "list"))
-                      : false;
+                      : true;  // not a keyword: a comment
         if (!ok) throw InputError(file, "PLY header: malformed line '" + std::string(trimmed(text).substr(0, 40)) + "'");
-        Tokens rest(text);
-        rest.next();
         if (keyword == "format") {
-            format = std::string(rest.next());
-            // OpenMesh loops on a version it cannot parse (found by the fuzzer).
-            if (rest.next() != "1.0") throw InputError(file, "PLY header: format version must be 1.0");
+            format = std::string(tokens[1]);
+            if (tokens[2] != "1.0") throw InputError(file, "PLY header: format version must be 1.0");
         } else if (keyword == "element") {
             PlyElement element;
-            element.name = std::string(rest.next());
-            if (!parseCount(rest.next(), element.count)) throw InputError(file, "PLY header: bad element count");
+            element.name = std::string(tokens[1]);
+            if (!parseCount(tokens[2], element.count)) throw InputError(file, "PLY header: bad element count");
             elements.push_back(element);
         } else if (keyword == "property") {
             if (elements.empty()) throw InputError(file, "PLY header: property before any element");
             PlyProperty property;
-            const std::string_view type = rest.next();
-            if (type == "list") {
-                property.countType = std::string(rest.next());
-                property.countSize = plyTypeSize(property.countType);
-                property.size = plyTypeSize(rest.next());
-                if (property.countSize == 0 || property.countSize == 8 || property.size == 0 ||
-                    property.countType == "float" || property.countType == "float32")
+            if (tokens[1] == "list") {
+                property.count = plyScalar(tokens[2]);
+                property.type = plyScalar(tokens[3]);
+                property.name = std::string(tokens[4]);
+                if (property.type == PlyScalar::Invalid || !plyIsInteger(property.count))
                     throw InputError(file, "PLY header: bad list property types");
             } else {
-                property.size = plyTypeSize(type);
-                if (property.size == 0) throw InputError(file, "PLY header: unknown property type");
+                property.type = plyScalar(tokens[1]);
+                property.name = std::string(tokens[2]);
+                if (property.type == PlyScalar::Invalid) throw InputError(file, "PLY header: unknown property type");
             }
             elements.back().properties.push_back(property);
         }
@@ -270,14 +381,17 @@ std::string precheckPly(std::string_view bytes, const fs::path& file, const Inge
     const bool big = format == "binary_big_endian";
     if (!ascii && !little && !big) throw InputError(file, "PLY header: unknown format '" + format + "'");
 
-    // Every element record needs at least one byte per property (ascii: a digit and a space).
+    // Every record takes at least a byte per property (ascii: a digit and a space), so the
+    // counts the header claims can be checked before anything is allocated for them.
     const std::uint64_t available = bytes.size() - dataStart;
     std::uint64_t minimum = 0;
+    const PlyElement* vertices = nullptr;
+    const PlyElement* faces = nullptr;
     for (const auto& element : elements) {
         std::uint64_t record = 0;
-        for (const auto& p : element.properties) record += ascii ? 2 : std::uint64_t(p.countSize ? p.countSize : p.size);
-        // A record takes at least a byte: an element of many empty records would only make the
-        // walk below spin (found by the fuzzer: 10^12 records of no property).
+        for (const auto& p : element.properties) record += ascii ? 2 : std::uint64_t(plySize(p.isList() ? p.count : p.type));
+        // An element of many empty records would only make the walk spin (found by the
+        // fuzzer: 10^12 records of no property).
         if (record == 0) {
             if (element.count > 0)
                 throw InputError(file, "PLY header: element '" + element.name + "' has records but no properties");
@@ -287,50 +401,86 @@ std::string precheckPly(std::string_view bytes, const fs::path& file, const Inge
             throw InputError(file, "PLY header claims " + std::to_string(element.count) + " '" + element.name +
                                        "' elements, more than the file's bytes can hold");
         minimum += element.count * record;
-        if (element.name == "face" && element.count > options.maxTriangles)
-            throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " faces (see --max-triangles)");
+        const PlyElement** role = element.name == "vertex" ? &vertices : element.name == "face" ? &faces : nullptr;
+        if (role && *role) throw InputError(file, "PLY header: two '" + element.name + "' elements");
+        if (role) *role = &element;
     }
+    if (faces && faces->count > options.maxTriangles)
+        throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " faces (see --max-triangles)");
 
-    // Walk the records: every list's count must fit in what remains.
-    if (ascii) {
-        Tokens tokens(bytes.substr(dataStart));
-        for (const auto& element : elements)
-            for (std::uint64_t r = 0; r < element.count; ++r) {
-                const std::string_view record = tokens.line();
-                if (record.empty() && tokens.done())
-                    throw InputError(file, "truncated PLY: missing '" + element.name + "' records");
-                Tokens fields(record);
-                for (const auto& p : element.properties) {
-                    const std::string_view token = fields.next();
-                    if (p.countSize == 0) continue;
-                    std::uint64_t count = 0;
-                    if (!parseCount(token, count) || count > record.size())
-                        throw InputError(file, "PLY '" + element.name + "' record " + std::to_string(r) +
-                                                   ": list count larger than its line");
-                    for (std::uint64_t i = 0; i < count; ++i) fields.next();
-                }
-            }
-        return canonical + "end_header\n" + std::string(bytes.substr(dataStart));
+    // Where each value the mesh needs sits in its record.
+    auto find = [](const PlyElement* element, std::initializer_list<std::string_view> names) -> int {
+        if (!element) return -1;
+        for (std::size_t i = 0; i < element->properties.size(); ++i)
+            for (const auto name : names)
+                if (element->properties[i].name == name) return int(i);
+        return -1;
+    };
+    int coordinate[6];
+    const char* coordinateNames[6] = {"x", "y", "z", "nx", "ny", "nz"};
+    for (int c = 0; c < 6; ++c) {
+        coordinate[c] = find(vertices, {coordinateNames[c]});
+        if (coordinate[c] >= 0 && vertices->properties[std::size_t(coordinate[c])].isList())
+            throw InputError(file, std::string("PLY header: vertex property '") + coordinateNames[c] + "' is a list");
     }
-    const auto* data = reinterpret_cast<const unsigned char*>(bytes.data()) + dataStart;
-    std::uint64_t at = 0;
-    for (const auto& element : elements)
-        for (std::uint64_t r = 0; r < element.count; ++r)
-            for (const auto& p : element.properties) {
-                if (p.countSize == 0) {
-                    if (available - at < std::uint64_t(p.size)) throw InputError(file, "truncated PLY data");
-                    at += std::uint64_t(p.size);
+    if (vertices && vertices->count > 0 && (coordinate[0] < 0 || coordinate[1] < 0 || coordinate[2] < 0))
+        throw InputError(file, "PLY header: vertices without x, y and z");
+    const bool hasNormals = coordinate[3] >= 0 && coordinate[4] >= 0 && coordinate[5] >= 0;
+    const int cornerList = find(faces, {"vertex_indices", "vertex_index"});
+    if (faces && faces->count > 0) {
+        if (cornerList < 0 || !faces->properties[std::size_t(cornerList)].isList())
+            throw InputError(file, "PLY header: faces without a vertex_indices list");
+        if (!plyIsInteger(faces->properties[std::size_t(cornerList)].type))
+            throw InputError(file, "PLY header: vertex_indices must hold integers");
+    }
+    const std::uint64_t vertexCount = vertices ? vertices->count : 0;
+    const std::uint64_t faceCount = faces ? faces->count : 0;
+
+    std::string body;
+    std::string faceBody;
+    PlyValues values(bytes.substr(dataStart), ascii, big, file);
+    std::uint64_t triangles = 0;
+    std::vector<std::int64_t> corners;
+    for (const auto& element : elements) {
+        const bool isVertex = &element == vertices;
+        const bool isFace = &element == faces;
+        for (std::uint64_t r = 0; r < element.count; ++r) {
+            values.at(element.name, r);
+            float vertex[6] = {0, 0, 0, 0, 0, 0};
+            for (std::size_t i = 0; i < element.properties.size(); ++i) {
+                const PlyProperty& p = element.properties[i];
+                if (!p.isList()) {
+                    const double value = values.next(p.type);
+                    if (isVertex)
+                        for (int c = 0; c < 6; ++c)
+                            if (coordinate[c] == int(i)) vertex[c] = toFloat(value);
                     continue;
                 }
-                if (available - at < std::uint64_t(p.countSize)) throw InputError(file, "truncated PLY data");
-                const std::uint64_t count = readPlyCount(data + at, p.countSize, big, p.countType);
-                at += std::uint64_t(p.countSize);
-                if (count > (available - at) / std::uint64_t(p.size))
-                    throw InputError(file, "PLY '" + element.name + "' record " + std::to_string(r) +
-                                               ": list of " + std::to_string(count) + " items runs past the end");
-                at += count * std::uint64_t(p.size);
+                const std::uint64_t n = values.listCount(p.count, p.type);
+                const bool isCorners = isFace && int(i) == cornerList;
+                if (isCorners) corners.clear();
+                for (std::uint64_t k = 0; k < n; ++k) {
+                    const double value = values.next(p.type);
+                    if (isCorners) corners.push_back(value >= 0 && value < double(vertexCount) ? std::int64_t(value) : -1);
+                }
+                if (isCorners) {
+                    triangles += n >= 3 ? n - 2 : 0;
+                    if (triangles > options.maxTriangles)
+                        throw InputError(file, "more than " + std::to_string(options.maxTriangles) +
+                                                   " triangles (see --max-triangles)");
+                    appendLittleEndian(faceBody, std::int32_t(n));
+                    for (const std::int64_t c : corners) appendLittleEndian(faceBody, std::int32_t(c));
+                }
             }
-    return canonical + "end_header\n" + std::string(bytes.substr(dataStart));
+            if (isVertex)
+                for (int c = 0; c < (hasNormals ? 6 : 3); ++c) appendLittleEndian(body, vertex[c]);
+        }
+    }
+    std::string canonical = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertexCount) +
+                            "\nproperty float x\nproperty float y\nproperty float z\n";
+    if (hasNormals) canonical += "property float nx\nproperty float ny\nproperty float nz\n";
+    canonical += "element face " + std::to_string(faceCount) + "\nproperty list int int vertex_indices\nend_header\n";
+    return canonical + body + faceBody;
 }
 
 // Binary STL: an 80-byte header, a 32-bit triangle count, 50 bytes per triangle, exactly.
@@ -360,7 +510,7 @@ std::string precheckOpenMeshInput(std::string_view bytes, const std::string& for
                                   const IngestOptions& options) {
     if (bytes.empty()) throw InputError(file, "empty file");
     if (format == "off") precheckOff(bytes, file, options);
-    else if (format == "ply") return precheckPly(bytes, file, options);
+    else if (format == "ply") return transcodePly(bytes, file, options);
     else if (format == "stl") precheckStl(bytes, file, options);
     else throw InputError(file, "unknown format '" + format + "'");
     return std::string(bytes);
@@ -404,8 +554,8 @@ RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format, cons
         const std::string_view magic = bytes.substr(0, std::min<std::size_t>(bytes.find_first_of(" \t\r\n"), 8));
         fileHasNormals = magic.find('N') != std::string_view::npos;
     } else if (format == "ply") {
-        const std::string_view header = bytes.substr(0, bytes.find("end_header"));
-        fileHasNormals = header.find(" nx\n") != std::string_view::npos || header.find(" nx\r") != std::string_view::npos;
+        const std::string_view header = std::string_view(checked).substr(0, checked.find("end_header"));
+        fileHasNormals = header.find("property float nx\n") != std::string_view::npos;
     }
     if (fileHasNormals && readOptions.check(OpenMesh::IO::Options::VertexNormal)) {
         out.normals.reserve(mesh.n_vertices());

@@ -10,7 +10,9 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace fs = std::filesystem;
 using namespace vtex;
@@ -292,6 +294,56 @@ TEST(Ingest, OffPlyStlThroughOpenMesh) {
     ASSERT_EQ(m.triangles.size(), 2u);
     EXPECT_EQ(m.positions.size(), 4u);  // welded
     for (std::size_t t = 0; t < 2; ++t) EXPECT_GT(faceNormal(m, t).z(), 0.99f);
+}
+
+TEST(Ingest, PlyListsBesideTheCornersAndBigEndianBinary) {
+    // Two triangles of the unit square, each face also carrying a texcoord list and a colour,
+    // and the vertices an unused property between the coordinates and the normals. OpenMesh's
+    // own reader takes a list other than the corners for one value and reads the rest of the
+    // file out of step; what reaches it now is only the values the mesh needs.
+    const std::string header =
+        "ply\nformat FORMAT 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+        "property uchar quality\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 2\n"
+        "property list uchar int vertex_indices\nproperty list uchar float texcoord\nproperty uchar red\nend_header\n";
+    const float corners[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    const int faces[2][3] = {{0, 1, 2}, {0, 2, 3}};
+    std::string ascii = header;
+    ascii.replace(ascii.find("FORMAT"), 6, "ascii");
+    for (const auto& c : corners) ascii += std::to_string(c[0]) + " " + std::to_string(c[1]) + " 0 7 0 0 1\n";
+    for (const auto& f : faces)
+        ascii += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
+                 " 6 0 0 1 0 1 1 255\n";
+    std::string binary = header;
+    binary.replace(binary.find("FORMAT"), 6, "binary_big_endian");
+    auto put = [&binary](auto value) {
+        char b[sizeof value];
+        std::memcpy(b, &value, sizeof value);
+        std::reverse(b, b + sizeof value);  // the test machine is little-endian (x86-64)
+        binary.append(b, sizeof value);
+    };
+    for (const auto& c : corners) {
+        put(c[0]), put(c[1]), put(0.f), put(std::uint8_t(7)), put(0.f), put(0.f), put(1.f);
+    }
+    for (const auto& f : faces) {
+        put(std::uint8_t(3)), put(std::int32_t(f[0])), put(std::int32_t(f[1])), put(std::int32_t(f[2]));
+        put(std::uint8_t(6));
+        for (float t : {0.f, 0.f, 1.f, 0.f, 1.f, 1.f}) put(t);
+        put(std::uint8_t(255));
+    }
+    for (const auto& [name, bytes] : {std::pair{"lists_ascii.ply", ascii}, std::pair{"lists_big.ply", binary}}) {
+        SCOPED_TRACE(name);
+        IngestReport report;
+        const TriangleMesh m = loadText(name, bytes, &report);
+        ASSERT_EQ(m.triangles.size(), 2u);
+        ASSERT_EQ(m.positions.size(), 4u);
+        float area = 0;
+        for (std::size_t t = 0; t < 2; ++t) {
+            const Eigen::Vector3f a = m.positions[m.triangles[t][0]], b = m.positions[m.triangles[t][1]],
+                                  c = m.positions[m.triangles[t][2]];
+            area += 0.5f * (b - a).cross(c - a).z();
+        }
+        EXPECT_FLOAT_EQ(area, 1.0f);  // both faces, counter-clockwise seen from +z
+    }
 }
 
 TEST(Ingest, MaxTrianglesIsEnforced) {

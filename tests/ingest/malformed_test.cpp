@@ -275,6 +275,29 @@ TEST(Malformed, FuzzPlyHeaderGarbageHangs) {
                   "no properties");
 }
 
+TEST(Malformed, FuzzPlyTokenOutOfStepBecomesACornerCount) {
+    // An extra token on a vertex line: OpenMesh reads tokens, not lines, so it took the token
+    // for the first face's corner count and pushed 4·10⁹ handles (out of memory; found in CI).
+    const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                             "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    expectRefused("fuzz_oom.ply", head + "0 0 0\n1 0 0\n0 1 0 4088888888888\n3 0 1 2\n", "record 0: '4088888888888' does not read as uint8");
+    // Values are checked against their declared types: a negative or fractional count, a
+    // corner that is not an integer, a coordinate that is not a number, a record cut short.
+    expectRefused("negative_count.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element face 1\nproperty list int int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n-1 0 1 2\n",
+                  "negative list count");
+    expectRefused("fraction.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2.5\n", "'2.5' does not read as int32");
+    expectRefused("word.ply", head + "0 0 zero\n1 0 0\n0 1 0\n3 0 1 2\n", "PLY 'vertex' record 0: 'zero' is not a number");
+    expectRefused("short.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1\n", "PLY 'face' record 0: truncated");
+    expectRefused("no_corners.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element face 1\nproperty uchar red\nend_header\n0 0 0\n1 0 0\n0 1 0\n3\n",
+                  "faces without a vertex_indices list");
+    // A coordinate beyond float's range is read as infinite and refused by name.
+    expectRefused("overflow.ply", head + "0 0 0\n1e60 0 0\n0 1 0\n3 0 1 2\n", "infinite");
+}
+
 TEST(Malformed, FuzzOffGarbageTokenHangs) {
     // A token OpenMesh's ASCII OFF reader cannot extract made it loop forever.
     expectRefused("fuzz_hang.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2=v\n", "OFF face 0");

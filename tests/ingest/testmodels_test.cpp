@@ -56,7 +56,7 @@ const Expectation kTable[] = {
     {"PLY/cube_binary.ply", 0, "", "ingested; binary PLY"},
     {"PLY/cube_uv.ply", 0, "", "ingested"},
     {"PLY/float-color.ply", 0, "", "ingested"},
-    {"PLY/issue623.ply", 3, "PLY 'vertex' record 0: list count larger", "vertex element declares a list its records do not hold"},
+    {"PLY/issue623.ply", 3, "PLY 'vertex' record 0: '7.941797' does not read as uint8", "vertex element declares a list its records do not hold"},
     {"PLY/points.ply", 3, "no faces", "point cloud"},
     {"PLY/pond.0.ply", 3, "PLY header claims 70051 'vertex' element", "truncated binary point cloud (69 bytes short)"},
     {"STL/3DSMaxExport.STL", 0, "", "ingested"},
