@@ -362,7 +362,7 @@ std::string transcodePly(std::string_view bytes, const fs::path& file, const Ing
         } else if (keyword == "property") {
             if (elements.empty()) throw InputError(file, "PLY header: property before any element");
             PlyProperty property;
-            if (tokens[1] == "list") {
+            if (tokens.size() == 5) {  // "property list <count> <item> <name>"
                 property.count = plyScalar(tokens[2]);
                 property.type = plyScalar(tokens[3]);
                 property.name = std::string(tokens[4]);

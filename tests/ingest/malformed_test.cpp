@@ -294,6 +294,11 @@ TEST(Malformed, FuzzPlyTokenOutOfStepBecomesACornerCount) {
                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                   "element face 1\nproperty uchar red\nend_header\n0 0 0\n1 0 0\n0 1 0\n3\n",
                   "faces without a vertex_indices list");
+    // "property list" with three tokens was read as a five-token list (the fuzzer, at once).
+    expectRefused("short_list.ply",
+                  "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                  "property float z\nelement face 1\nproperty list vertex_indices\nend_header\n" + std::string(24, '\0'),
+                  "unknown property type");
     // A coordinate beyond float's range is read as infinite and refused by name.
     expectRefused("overflow.ply", head + "0 0 0\n1e60 0 0\n0 1 0\n3 0 1 2\n", "infinite");
 }
