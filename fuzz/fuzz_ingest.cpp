@@ -1,5 +1,5 @@
 // libFuzzer target for the ingest entry points. The first byte picks the reader (GLB, glTF
-// JSON, OBJ, or OFF/PLY/STL through OpenMesh); the rest is the file. Nothing external can be
+// JSON, OBJ, OFF, PLY or STL); the rest is the file. Nothing external can be
 // read (no folder is given), textures are capped small, and every mesh that is accepted must
 // survive the rest of the pipeline: repair, .glb encoding, and ingesting that .glb again.
 #include "detail.h"
@@ -27,9 +27,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
             case 0: raw = detail::readGltf(bytes, true, file, {}, options); break;
             case 1: raw = detail::readGltf(bytes, false, file, {}, options); break;
             case 2: raw = detail::readObj(bytes, file, {}, options); break;
-            case 3: raw = detail::readWithOpenMesh(bytes, "off", file, options); break;
-            case 4: raw = detail::readWithOpenMesh(bytes, "ply", file, options); break;
-            default: raw = detail::readWithOpenMesh(bytes, "stl", file, options); break;
+            case 3: raw = detail::readOffPlyStl(bytes, "off", file, options); break;
+            case 4: raw = detail::readOffPlyStl(bytes, "ply", file, options); break;
+            default: raw = detail::readOffPlyStl(bytes, "stl", file, options); break;
         }
         IngestReport report;
         const TriangleMesh mesh = detail::repairMesh(std::move(raw), file, options, report);

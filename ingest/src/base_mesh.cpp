@@ -27,7 +27,7 @@ QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& op
     else if (extension == ".obj")
         raw = detail::readObj(bytes, file, directory, options);
     else if (extension == ".off" || extension == ".ply" || extension == ".stl")
-        raw = detail::readWithOpenMesh(bytes, extension.substr(1), file, options);
+        raw = detail::readOffPlyStl(bytes, extension.substr(1), file, options);
     else
         throw InputError(file, "unknown mesh format '" + extension + "'");
 

@@ -58,15 +58,14 @@ void checkGltfSchema(std::string_view json, const std::filesystem::path& file);
 RawMesh readObj(std::string_view text, const std::filesystem::path& file,
                 const std::filesystem::path& directory, const IngestOptions& options);
 
-/// OFF, PLY and STL through OpenMesh, after checking the sizes the header claims against the
-/// bytes present.
-RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format,
-                         const std::filesystem::path& file, const IngestOptions& options);
+/// OFF (read here), PLY and STL (through OpenMesh, after checking every count the file claims
+/// against the bytes present).
+RawMesh readOffPlyStl(std::string_view bytes, const std::string& format,
+                      const std::filesystem::path& file, const IngestOptions& options);
 
-/// Checks the element counts an OFF/PLY/STL header claims against the file's size, so that
-/// OpenMesh never reserves memory for elements that are not there, and returns the bytes
-/// OpenMesh may read (for PLY, every value checked and rewritten as a canonical binary PLY).
-/// Throws InputError.
+/// Checks the counts a PLY/STL file claims against its size, so that OpenMesh never reserves
+/// memory for elements that are not there, and returns the bytes OpenMesh may read (for PLY,
+/// every value checked and rewritten as a canonical binary PLY). Throws InputError.
 std::string precheckOpenMeshInput(std::string_view bytes, const std::string& format,
                            const std::filesystem::path& file, const IngestOptions& options);
 

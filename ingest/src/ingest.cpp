@@ -87,7 +87,7 @@ TriangleMesh loadMesh(const std::filesystem::path& file, const IngestOptions& op
         raw = detail::readObj(bytes, file, directory, options);
     } else if (extension == ".off" || extension == ".ply" || extension == ".stl") {
         const std::string bytes = detail::readFileBounded(file, options.maxFileBytes);
-        raw = detail::readWithOpenMesh(bytes, extension.substr(1), file, options);
+        raw = detail::readOffPlyStl(bytes, extension.substr(1), file, options);
     } else {
         throw InputError(file, "unknown mesh format '" + extension +
                                    "' (expected .gltf, .glb, .obj, .off, .ply or .stl)");

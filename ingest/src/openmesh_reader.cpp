@@ -1,12 +1,13 @@
-// OFF, PLY and STL through OpenMesh 9, behind a pre-check of what each file claims.
+// OFF, PLY and STL: OFF read here, PLY and STL through OpenMesh 9 behind a check of every
+// count the file claims.
 //
-// OpenMesh's readers trust their input: they reserve memory for the element counts an OFF
-// or PLY header states and size a vector by each face's stated corner count. So before
-// OpenMesh sees a byte, precheckOpenMeshInput() checks that the counts fit in the bytes
-// present and walks the OFF records that carry counts, bounding each by what the file can
-// hold. A PLY file is read whole here and handed to OpenMesh as a canonical binary PLY of
-// just the values the mesh needs (see transcodePly). Invalid vertex indices are skipped by
-// OpenMesh's importer.
+// OpenMesh's readers trust their input: they reserve memory for the element counts a header
+// states, size a vector by each face's stated corner count, and extract ASCII values with
+// operator>> across line ends, carrying on after a failed extraction. So a PLY file is read
+// whole here and handed to OpenMesh as a canonical binary PLY of just the values the mesh
+// needs (transcodePly), an STL file's size is checked against its triangle count, and OFF,
+// whose OpenMesh reader cannot be made safe from outside (see readOff), does not go through
+// OpenMesh at all. Invalid PLY vertex indices are skipped by OpenMesh's importer.
 #include "detail.h"
 
 #include <vtex/core/error.h>
@@ -20,6 +21,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 namespace vtex::ingest::detail {
@@ -83,9 +85,26 @@ bool parseCount(std::string_view token, std::uint64_t& value) {
     return ec == std::errc() && end == token.data() + token.size();
 }
 
-void precheckOff(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
-    // Line by line, as OpenMesh reads it: the keyword alone on the first line, then exactly
-    // three counts (the fuzzer found that "OFF 0 0" made the two readers disagree on the counts).
+// A decimal number as a float, rounded once from the text (as strtof would); out-of-range
+// values become ±inf (or 0), which the mesh's repair refuses or drops by name.
+std::optional<float> parseFloat(std::string_view token) {
+    if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
+    float value = 0;
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+    if ((ec != std::errc() && ec != std::errc::result_out_of_range) || end != token.data() + token.size())
+        return std::nullopt;
+    if (ec == std::errc::result_out_of_range) value = std::strtof(std::string(token).c_str(), nullptr);
+    return value;
+}
+
+// OFF is read here, not by OpenMesh. OpenMesh's ASCII OFF reader extracts with operator>>
+// across line ends and leaves a plain OFF face's colour on the stream, so "3 0 1 2 4000000000"
+// made the next face 4·10⁹ corners long (out of memory); after a failed extraction ("nan") it
+// carries on with the vertex count as every face's corner count. Read from a stream it also
+// never parses the header line, so it ignores "NOFF" and "BINARY".
+RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
+    // Line by line: the keyword ([ST][C][N]OFF) alone on the first line, then exactly three
+    // counts on one line (the fuzzer found that "OFF 0 0" made two readers disagree).
     Tokens tokens(bytes);
     Tokens magicLine(tokens.line());
     const std::string_view magic = magicLine.next();
@@ -93,6 +112,11 @@ void precheckOff(std::string_view bytes, const fs::path& file, const IngestOptio
         throw InputError(file, "not an OFF file (no OFF keyword)");
     if (magic.find('n') != std::string_view::npos || magic.find('4') != std::string_view::npos)
         throw InputError(file, "nOFF and 4OFF (higher-dimensional) files are not supported");
+    std::string_view prefix = magic.substr(0, magic.size() - 3);
+    if (prefix.substr(0, 2) == "ST") prefix.remove_prefix(2);
+    if (prefix.substr(0, 1) == "C") prefix.remove_prefix(1);
+    const bool hasNormals = prefix == "N";
+    if (!prefix.empty() && !hasNormals) throw InputError(file, "not an OFF file (keyword '" + std::string(magic.substr(0, 40)) + "')");
     const std::string_view extra = magicLine.next();
     if (extra == "BINARY") throw InputError(file, "binary OFF is not supported");
     if (!extra.empty()) throw InputError(file, "OFF header: the keyword must be alone on its line");
@@ -109,47 +133,61 @@ void precheckOff(std::string_view bytes, const fs::path& file, const IngestOptio
                                    std::to_string(available) + " bytes can hold");
     if (faces > options.maxTriangles)
         throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " faces (see --max-triangles)");
-    // Every record is checked token by token: vertex lines hold numbers only; face lines a
-    // corner count (which OpenMesh uses to size a vector), that many vertex indices in range,
-    // then numbers (a colour). OpenMesh's ASCII OFF reader loops forever on a token it cannot
-    // extract (found by the fuzzer), so it only ever sees records that passed this check.
-    auto isNumber = [](std::string_view token) {
-        double value;
-        if (!token.empty() && token.front() == '+') token.remove_prefix(1);
-        const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-        return (ec == std::errc() || ec == std::errc::result_out_of_range) && end == token.data() + token.size();
-    };
+
+    RawMesh out;
+    out.format = "off";
+    out.positions.reserve(vertices);
+    if (hasNormals) out.normals.reserve(vertices);
+    // A vertex line: x y z, then nx ny nz for NOFF, then anything numeric (a colour, texture
+    // coordinates), which is not kept.
+    const int wanted = hasNormals ? 6 : 3;
     for (std::uint64_t v = 0; v < vertices; ++v) {
         const std::string_view record = tokens.line();
         if (record.empty() && tokens.done()) throw InputError(file, "truncated OFF: missing vertices");
         Tokens fields(record);
+        float values[6] = {0, 0, 0, 0, 0, 0};
         int count = 0;
-        for (std::string_view t = fields.next(); !t.empty(); t = fields.next(), ++count)
-            if (!isNumber(t)) throw InputError(file, "OFF vertex " + std::to_string(v) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
-        if (count < 3) throw InputError(file, "OFF vertex " + std::to_string(v) + ": fewer than 3 coordinates");
+        for (std::string_view t = fields.next(); !t.empty(); t = fields.next(), ++count) {
+            const auto value = parseFloat(t);
+            if (!value) throw InputError(file, "OFF vertex " + std::to_string(v) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
+            if (count < wanted) values[count] = *value;
+        }
+        if (count < wanted)
+            throw InputError(file, "OFF vertex " + std::to_string(v) + ": fewer than " + std::to_string(wanted) +
+                                       (hasNormals ? " numbers (NOFF: a position and a normal)" : " coordinates"));
+        out.positions.emplace_back(values[0], values[1], values[2]);
+        if (hasNormals) out.normals.emplace_back(values[3], values[4], values[5]);
     }
-    std::uint64_t triangles = 0;
+    // A face line: a corner count, that many vertex indices in range, then numbers (a colour).
+    std::vector<std::uint32_t> corners;
     for (std::uint64_t f = 0; f < faces; ++f) {
         std::string_view record = tokens.line();
         if (record.empty() && tokens.done()) throw InputError(file, "truncated OFF: missing faces");
         Tokens face(record);
-        std::uint64_t corners = 0;
-        if (!parseCount(face.next(), corners))
+        std::uint64_t count = 0;
+        if (!parseCount(face.next(), count))
             throw InputError(file, "OFF face " + std::to_string(f) + ": bad corner count");
-        if (corners > vertices || corners > record.size())
-            throw InputError(file, "OFF face " + std::to_string(f) + " claims " + std::to_string(corners) +
+        if (count > vertices || count > record.size())
+            throw InputError(file, "OFF face " + std::to_string(f) + " claims " + std::to_string(count) +
                                        " corners, more than the file holds");
-        for (std::uint64_t k = 0; k < corners; ++k) {
+        corners.clear();
+        for (std::uint64_t k = 0; k < count; ++k) {
             std::uint64_t index = 0;
             if (!parseCount(face.next(), index) || index >= vertices)
                 throw InputError(file, "OFF face " + std::to_string(f) + ": bad or out-of-range vertex index");
+            corners.push_back(std::uint32_t(index));
         }
         for (std::string_view t = face.next(); !t.empty(); t = face.next())
-            if (!isNumber(t)) throw InputError(file, "OFF face " + std::to_string(f) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
-        triangles += corners >= 3 ? corners - 2 : 0;
-        if (triangles > options.maxTriangles)
+            if (!parseFloat(t)) throw InputError(file, "OFF face " + std::to_string(f) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
+        if (corners.size() < 3) continue;
+        const std::size_t added = corners.size() - 2;
+        if (out.triangles.size() + added > options.maxTriangles)
             throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " triangles (see --max-triangles)");
+        for (std::size_t i = 1; i + 1 < corners.size(); ++i) out.triangles.push_back({corners[0], corners[i], corners[i + 1]});
+        out.polygonTriangles.push_back(std::uint32_t(added));
     }
+    if (out.triangles.empty()) throw InputError(file, "no faces");
+    return out;
 }
 
 enum class PlyScalar { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64, Invalid };
@@ -508,16 +546,18 @@ void precheckStl(std::string_view bytes, const fs::path& file, const IngestOptio
 
 std::string precheckOpenMeshInput(std::string_view bytes, const std::string& format, const fs::path& file,
                                   const IngestOptions& options) {
-    if (bytes.empty()) throw InputError(file, "empty file");
-    if (format == "off") precheckOff(bytes, file, options);
-    else if (format == "ply") return transcodePly(bytes, file, options);
-    else if (format == "stl") precheckStl(bytes, file, options);
-    else throw InputError(file, "unknown format '" + format + "'");
-    return std::string(bytes);
+    if (format == "ply") return transcodePly(bytes, file, options);
+    if (format == "stl") {
+        precheckStl(bytes, file, options);
+        return std::string(bytes);
+    }
+    throw InputError(file, "unknown format '" + format + "'");
 }
 
-RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format, const fs::path& file,
-                         const IngestOptions& options) {
+RawMesh readOffPlyStl(std::string_view bytes, const std::string& format, const fs::path& file,
+                      const IngestOptions& options) {
+    if (bytes.empty()) throw InputError(file, "empty file");
+    if (format == "off") return readOff(bytes, file, options);
     const std::string checked = precheckOpenMeshInput(bytes, format, file, options);
 
     // OpenMesh reports through omerr()/omlog(); libraries never print.
@@ -548,15 +588,10 @@ RawMesh readWithOpenMesh(std::string_view bytes, const std::string& format, cons
         out.positions.emplace_back(p[0], p[1], p[2]);
     }
     // OpenMesh leaves the VertexNormal option set (and the normals unset) when the file has
-    // none, so ask the header: "NOFF"/"CNOFF"/..., or a PLY vertex property "nx".
-    bool fileHasNormals = false;
-    if (format == "off") {
-        const std::string_view magic = bytes.substr(0, std::min<std::size_t>(bytes.find_first_of(" \t\r\n"), 8));
-        fileHasNormals = magic.find('N') != std::string_view::npos;
-    } else if (format == "ply") {
-        const std::string_view header = std::string_view(checked).substr(0, checked.find("end_header"));
-        fileHasNormals = header.find("property float nx\n") != std::string_view::npos;
-    }
+    // none, so ask the canonical PLY header.
+    const bool fileHasNormals =
+        format == "ply" && std::string_view(checked).substr(0, checked.find("end_header")).find("property float nx\n") !=
+                               std::string_view::npos;
     if (fileHasNormals && readOptions.check(OpenMesh::IO::Options::VertexNormal)) {
         out.normals.reserve(mesh.n_vertices());
         for (const auto vh : mesh.vertices()) {

@@ -269,7 +269,7 @@ TEST(Ingest, ObjMaterialsNegativeIndicesAndPolygons) {
     EXPECT_FLOAT_EQ(half.baseColorFactor[3], 0.5f);
 }
 
-TEST(Ingest, OffPlyStlThroughOpenMesh) {
+TEST(Ingest, OffPlyAndStl) {
     // A unit square, counter-clockwise seen from +z, in each format.
     IngestReport report;
     TriangleMesh m = loadText("sq.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", &report);
@@ -344,6 +344,22 @@ TEST(Ingest, PlyListsBesideTheCornersAndBigEndianBinary) {
         }
         EXPECT_FLOAT_EQ(area, 1.0f);  // both faces, counter-clockwise seen from +z
     }
+}
+
+TEST(Ingest, OffFaceColoursCommentsAndNoffNormals) {
+    // A plain OFF may give faces a colour; OpenMesh's reader left it on the stream, so the
+    // next face took the colour for its corner count. NOFF normals are the file's, not computed.
+    IngestReport report;
+    TriangleMesh m = loadText("colours.off",
+                              "OFF\n# a unit square\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+                              "3 0 1 2 255 0 0\n3 0 2 3 0.5 0.5 0.5 1\n",
+                              &report);
+    ASSERT_EQ(m.triangles.size(), 2u);
+    for (std::size_t t = 0; t < 2; ++t) EXPECT_GT(faceNormal(m, t).z(), 0.99f);
+    m = loadText("normals.off",
+                 "NOFF\n3 1 0\n0 0 0 0 0.6 0.8\n1 0 0 0 0.6 0.8\n0 1 0 0 0.6 0.8 1 1 1\n3 0 1 2\n", &report);
+    ASSERT_EQ(m.normals.size(), 3u);
+    for (const auto& n : m.normals) EXPECT_LT((n - Eigen::Vector3f(0, 0.6f, 0.8f)).norm(), 1e-6f);
 }
 
 TEST(Ingest, MaxTrianglesIsEnforced) {

@@ -303,6 +303,23 @@ TEST(Malformed, FuzzPlyTokenOutOfStepBecomesACornerCount) {
     expectRefused("overflow.ply", head + "0 0 0\n1e60 0 0\n0 1 0\n3 0 1 2\n", "infinite");
 }
 
+TEST(Malformed, OffValuesOpenMeshReadOutOfStep) {
+    // A face colour of 4·10⁹ became the next face's corner count in OpenMesh (out of memory);
+    // now the colour is read as a colour and the file is fine.
+    const std::string square = "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+    EXPECT_EQ(ingest::loadMesh([&] {
+                  const fs::path path = dir() / "colour_count.off";
+                  test::writeBytes(path, square + "3 0 1 2 4000000000\n3 0 2 3\n");
+                  return path;
+              }()).triangles.size(),
+              2u);
+    // "nan" stopped OpenMesh's stream (then "no faces"); now the coordinate is refused by name.
+    expectRefused("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", "NaN or infinite coordinate at vertex 1");
+    // NOFF vertex lines without a normal were read across line ends.
+    expectRefused("short_normal.off", "NOFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "fewer than 6 numbers");
+    expectRefused("keyword.off", "XOFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "not an OFF file");
+}
+
 TEST(Malformed, FuzzOffGarbageTokenHangs) {
     // A token OpenMesh's ASCII OFF reader cannot extract made it loop forever.
     expectRefused("fuzz_hang.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2=v\n", "OFF face 0");
