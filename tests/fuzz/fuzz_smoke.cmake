@@ -2,9 +2,8 @@
 #       -DRUNS=<target>:<corpus folder>:<runs>[;...] -DSECONDS=<cap per target> -P fuzz_smoke.cmake
 #
 # A fixed seed and a fixed number of runs: each fuzzer replays its seed corpus (the regression
-# inputs included) and then the same mutations on every machine, so CI tests what was tested
-# before the commit. A slower machine that reaches the time cap first has run a prefix of the
-# same sequence. Open-ended fuzzing is fuzz/README.md's campaign, not a test.
+# inputs included), then mutates for a bounded, alike (not bit-identical: coverage feedback
+# varies between runs) amount of work. Open-ended fuzzing is fuzz/README.md's campaign.
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE} -B ${BINARY} -DCMAKE_CXX_COMPILER=${CXX}
                         -DCMAKE_BUILD_TYPE=RelWithDebInfo RESULT_VARIABLE status)
 if(NOT status EQUAL 0)
