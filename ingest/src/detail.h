@@ -8,11 +8,14 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <charconv>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 namespace vtex::ingest::detail {
@@ -36,6 +39,25 @@ struct RawMesh {
     RepairCounts repairs;  ///< the counts a reader already knows (invalidIndexFaces)
     std::string format;
 };
+
+/// A decimal number of a text format (OBJ, OFF, ASCII PLY): what std::from_chars reads, a
+/// leading '+' allowed, rounded once to T. Beyond T's range it is ±inf, or 0 / a denormal below
+/// it (strtod's reading), which repair refuses or drops by name. nullopt: not a number.
+template <typename T>
+std::optional<T> parseDecimal(std::string_view token) {
+    static_assert(std::is_floating_point_v<T>);
+    if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
+    T value{};
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+    if ((ec != std::errc() && ec != std::errc::result_out_of_range) || end != token.data() + token.size())
+        return std::nullopt;
+    if (ec == std::errc::result_out_of_range) {
+        const std::string text(token);
+        if constexpr (std::is_same_v<T, float>) value = std::strtof(text.c_str(), nullptr);
+        else value = T(std::strtod(text.c_str(), nullptr));
+    }
+    return value;
+}
 
 /// Reads a whole regular file of at most `maxBytes` bytes. Throws InputError.
 std::string readFileBounded(const std::filesystem::path& file, std::uint64_t maxBytes);

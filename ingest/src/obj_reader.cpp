@@ -39,16 +39,6 @@ std::string_view nextToken(std::string_view& s) {
     return token;
 }
 
-bool parseDouble(std::string_view token, double& value) {
-    if (!token.empty() && token.front() == '+') token.remove_prefix(1);
-    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-    if (ec == std::errc::result_out_of_range) {
-        value = std::numeric_limits<double>::infinity();  // caught by the NaN/Inf check
-        return true;
-    }
-    return ec == std::errc() && end == token.data() + token.size();
-}
-
 struct Corner {
     std::int64_t v = 0, vt = 0, vn = 0;
     bool operator==(const Corner&) const = default;
@@ -123,9 +113,9 @@ private:
                 if (i < required) fail(std::string("'") + what + "' needs " + std::to_string(required) + " numbers");
                 break;
             }
-            double value;
-            if (!parseDouble(token, value)) fail("bad number '" + std::string(token.substr(0, 40)) + "'");
-            v[i] = float(value);
+            const auto value = parseDecimal<float>(token);
+            if (!value) fail("bad number '" + std::string(token.substr(0, 40)) + "'");
+            v[i] = *value;
         }
         return v;
     }
@@ -300,15 +290,14 @@ private:
             } else if (current >= 0 && keyword == "Kd") {
                 Eigen::Vector3f kd = Eigen::Vector3f::Ones();
                 for (int i = 0; i < 3; ++i) {
-                    double value;
-                    if (!parseDouble(nextToken(args), value) || !std::isfinite(value)) break;
-                    kd[i] = float(std::clamp(value, 0.0, 1.0));
+                    const auto value = parseDecimal<float>(nextToken(args));
+                    if (!value || !std::isfinite(*value)) break;
+                    kd[i] = std::clamp(*value, 0.0f, 1.0f);
                 }
                 mOut.materials[std::size_t(current)].baseColorFactor.head<3>() = kd;
             } else if (current >= 0 && keyword == "d") {
-                double value;
-                if (parseDouble(nextToken(args), value) && std::isfinite(value))
-                    mOut.materials[std::size_t(current)].baseColorFactor[3] = float(std::clamp(value, 0.0, 1.0));
+                if (const auto value = parseDecimal<float>(nextToken(args)); value && std::isfinite(*value))
+                    mOut.materials[std::size_t(current)].baseColorFactor[3] = std::clamp(*value, 0.0f, 1.0f);
             } else if (current >= 0 && keyword == "map_Kd") {
                 // Options (-o, -s, ...) come first; the file name is the last token.
                 std::string_view last, token, more = args;

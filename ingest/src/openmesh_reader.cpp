@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <optional>
@@ -85,18 +84,6 @@ bool parseCount(std::string_view token, std::uint64_t& value) {
     return ec == std::errc() && end == token.data() + token.size();
 }
 
-// A decimal number as a float, rounded once from the text (as strtof would); out-of-range
-// values become ±inf (or 0), which the mesh's repair refuses or drops by name.
-std::optional<float> parseFloat(std::string_view token) {
-    if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
-    float value = 0;
-    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-    if ((ec != std::errc() && ec != std::errc::result_out_of_range) || end != token.data() + token.size())
-        return std::nullopt;
-    if (ec == std::errc::result_out_of_range) value = std::strtof(std::string(token).c_str(), nullptr);
-    return value;
-}
-
 // OFF is read here, not by OpenMesh. OpenMesh's ASCII OFF reader extracts with operator>>
 // across line ends and leaves a plain OFF face's colour on the stream, so "3 0 1 2 4000000000"
 // made the next face 4·10⁹ corners long (out of memory); after a failed extraction ("nan") it
@@ -148,7 +135,7 @@ RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOption
         float values[6] = {0, 0, 0, 0, 0, 0};
         int count = 0;
         for (std::string_view t = fields.next(); !t.empty(); t = fields.next(), ++count) {
-            const auto value = parseFloat(t);
+            const auto value = parseDecimal<float>(t);
             if (!value) throw InputError(file, "OFF vertex " + std::to_string(v) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
             if (count < wanted) values[count] = *value;
         }
@@ -178,7 +165,7 @@ RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOption
             corners.push_back(std::uint32_t(index));
         }
         for (std::string_view t = face.next(); !t.empty(); t = face.next())
-            if (!parseFloat(t)) throw InputError(file, "OFF face " + std::to_string(f) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
+            if (!parseDecimal<float>(t)) throw InputError(file, "OFF face " + std::to_string(f) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
         if (corners.size() < 3) continue;
         const std::size_t added = corners.size() - 2;
         if (out.triangles.size() + added > options.maxTriangles)
@@ -267,27 +254,24 @@ private:
         mAt = end;
         if (token.empty()) fail("truncated (missing values)");
         const std::string_view shown = token.substr(0, 40);
-        if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
-        const char* const first = token.data();
-        const char* const last = first + token.size();
         if (plyIsInteger(type)) {
+            if (token.size() > 1 && token.front() == '+' && token[1] != '-') token.remove_prefix(1);
             std::int64_t value = 0;
-            const auto [stop, ec] = std::from_chars(first, last, value);
+            const auto [stop, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
             const std::int64_t bits = 8 * plySize(type);
             const bool isSigned = type == PlyScalar::Int8 || type == PlyScalar::Int16 || type == PlyScalar::Int32;
             const std::int64_t lo = isSigned ? -(std::int64_t(1) << (bits - 1)) : 0;
             const std::int64_t hi = isSigned ? (std::int64_t(1) << (bits - 1)) - 1 : (std::int64_t(1) << bits) - 1;
-            if (ec != std::errc() || stop != last || value < lo || value > hi)
+            if (ec != std::errc() || stop != token.data() + token.size() || value < lo || value > hi)
                 fail("'" + std::string(shown) + "' does not read as " + plyName(type));
             return double(value);
         }
-        double value = 0;
-        const auto [stop, ec] = std::from_chars(first, last, value);
-        if ((ec != std::errc() && ec != std::errc::result_out_of_range) || stop != last)
-            fail("'" + std::string(shown) + "' is not a number");
-        // from_chars leaves the value alone when out of range; strtod gives ±inf or 0 then.
-        if (ec == std::errc::result_out_of_range) value = std::strtod(std::string(token).c_str(), nullptr);
-        return value;
+        // A float32 value is rounded once from the text, as OpenMesh's own reader did.
+        std::optional<double> value;
+        if (type != PlyScalar::Float32) value = parseDecimal<double>(token);
+        else if (const auto single = parseDecimal<float>(token)) value = *single;
+        if (!value) fail("'" + std::string(shown) + "' is not a number");
+        return *value;
     }
     double nextBinary(PlyScalar type) {
         const int size = plySize(type);

@@ -362,6 +362,33 @@ TEST(Ingest, OffFaceColoursCommentsAndNoffNormals) {
     for (const auto& n : m.normals) EXPECT_LT((n - Eigen::Vector3f(0, 0.6f, 0.8f)).norm(), 1e-6f);
 }
 
+TEST(Ingest, TextFormatsReadDecimalsBeyondFloatAlike) {
+    // One triangle whose first corner's x is `x`, in each text format. Below float's range a
+    // value is 0 (OBJ read 1e-400 as +inf and refused the file); above it, ±inf, refused.
+    auto files = [](const std::string& x) {
+        return std::vector<std::pair<std::string, std::string>>{
+            {"tiny.obj", "v " + x + " 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},
+            {"tiny.off", "OFF\n3 1 0\n" + x + " 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
+            {"tiny.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                         "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n" +
+                             x + " 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"}};
+    };
+    for (const auto& [name, bytes] : files("1e-400")) {
+        const TriangleMesh m = loadText(name, bytes);
+        ASSERT_EQ(m.triangles.size(), 1u) << name;
+        EXPECT_EQ(std::count_if(m.positions.begin(), m.positions.end(), [](const auto& p) { return p.x() == 0.0f; }), 2)
+            << name;
+    }
+    for (const auto& [name, bytes] : files("-1e999")) {
+        try {
+            loadText(name, bytes);
+            ADD_FAILURE() << name << ": loaded";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("NaN or infinite"), std::string::npos) << e.what();
+        }
+    }
+}
+
 TEST(Ingest, MaxTrianglesIsEnforced) {
     IngestOptions options;
     options.maxTriangles = 11;
