@@ -85,12 +85,6 @@ RawMesh readObj(std::string_view text, const std::filesystem::path& file,
 RawMesh readOffPlyStl(std::string_view bytes, const std::string& format,
                       const std::filesystem::path& file, const IngestOptions& options);
 
-/// Checks the counts a PLY/STL file claims against its size, so that OpenMesh never reserves
-/// memory for elements that are not there, and returns the bytes OpenMesh may read (for PLY,
-/// every value checked and rewritten as a canonical binary PLY). Throws InputError.
-std::string precheckOpenMeshInput(std::string_view bytes, const std::string& format,
-                           const std::filesystem::path& file, const IngestOptions& options);
-
 // --- repair ------------------------------------------------------------------------------
 
 /// Non-finite faces, welding, degenerate and zero-area faces, normals, closedness and

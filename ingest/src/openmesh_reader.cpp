@@ -55,7 +55,6 @@ public:
             if (!l.empty() || mAt >= mText.size()) return l;
         }
     }
-    std::size_t position() const { return mAt; }
     bool done() {
         skip();
         return mAt >= mText.size();
@@ -82,6 +81,18 @@ std::string_view trimmed(std::string_view s) {
 bool parseCount(std::string_view token, std::uint64_t& value) {
     const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
     return ec == std::errc() && end == token.data() + token.size();
+}
+
+// A polygon's fan from its first corner, as the OBJ reader makes it; polygons of fewer than
+// three corners add nothing.
+void appendFan(RawMesh& out, const std::vector<std::uint32_t>& corners, const fs::path& file,
+               const IngestOptions& options) {
+    if (corners.size() < 3) return;
+    const std::size_t added = corners.size() - 2;
+    if (out.triangles.size() + added > options.maxTriangles)
+        throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " triangles (see --max-triangles)");
+    for (std::size_t i = 1; i + 1 < corners.size(); ++i) out.triangles.push_back({corners[0], corners[i], corners[i + 1]});
+    out.polygonTriangles.push_back(std::uint32_t(added));
 }
 
 // OFF is read here, not by OpenMesh. OpenMesh's ASCII OFF reader extracts with operator>>
@@ -166,12 +177,7 @@ RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOption
         }
         for (std::string_view t = face.next(); !t.empty(); t = face.next())
             if (!parseDecimal<float>(t)) throw InputError(file, "OFF face " + std::to_string(f) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
-        if (corners.size() < 3) continue;
-        const std::size_t added = corners.size() - 2;
-        if (out.triangles.size() + added > options.maxTriangles)
-            throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " triangles (see --max-triangles)");
-        for (std::size_t i = 1; i + 1 < corners.size(); ++i) out.triangles.push_back({corners[0], corners[i], corners[i + 1]});
-        out.polygonTriangles.push_back(std::uint32_t(added));
+        appendFan(out, corners, file, options);
     }
     if (out.triangles.empty()) throw InputError(file, "no faces");
     return out;
@@ -323,6 +329,13 @@ void appendLittleEndian(std::string& out, T value) {
     out.append(b, sizeof(T));
 }
 
+// What OpenMesh is given to read, and whether the file has vertex normals (OpenMesh leaves
+// its VertexNormal option set, and the normals zero, when it has none).
+struct OpenMeshInput {
+    std::string bytes;
+    bool hasNormals = false;
+};
+
 // Returns the mesh as a canonical binary PLY that OpenMesh reads without surprises: vertex
 // x, y, z (and nx, ny, nz when all three are there) as float32, then faces as an int32 count
 // (OpenMesh takes no unsigned count type) and int32 indices, -1 for an index that names no
@@ -337,7 +350,7 @@ void appendLittleEndian(std::string& out, T value) {
 // value is read and checked here, in the file's order, and OpenMesh only sees what was
 // checked. Header lines that are not PLY keywords are dropped as comments (Blender 2.4 wrote
 // such lines).
-std::string transcodePly(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
+OpenMeshInput transcodePly(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
     if (bytes.substr(0, 4) != "ply\n" && bytes.substr(0, 5) != "ply\r\n")
         throw InputError(file, "not a PLY file (no 'ply' magic line)");
     std::size_t headerEnd = std::string_view::npos;
@@ -502,7 +515,7 @@ std::string transcodePly(std::string_view bytes, const fs::path& file, const Ing
                             "\nproperty float x\nproperty float y\nproperty float z\n";
     if (hasNormals) canonical += "property float nx\nproperty float ny\nproperty float nz\n";
     canonical += "element face " + std::to_string(faceCount) + "\nproperty list int int vertex_indices\nend_header\n";
-    return canonical + body + faceBody;
+    return {canonical + body + faceBody, hasNormals};
 }
 
 // Binary STL: an 80-byte header, a 32-bit triangle count, 50 bytes per triangle, exactly.
@@ -528,21 +541,16 @@ void precheckStl(std::string_view bytes, const fs::path& file, const IngestOptio
 
 }  // namespace
 
-std::string precheckOpenMeshInput(std::string_view bytes, const std::string& format, const fs::path& file,
-                                  const IngestOptions& options) {
-    if (format == "ply") return transcodePly(bytes, file, options);
-    if (format == "stl") {
-        precheckStl(bytes, file, options);
-        return std::string(bytes);
-    }
-    throw InputError(file, "unknown format '" + format + "'");
-}
-
 RawMesh readOffPlyStl(std::string_view bytes, const std::string& format, const fs::path& file,
                       const IngestOptions& options) {
     if (bytes.empty()) throw InputError(file, "empty file");
     if (format == "off") return readOff(bytes, file, options);
-    const std::string checked = precheckOpenMeshInput(bytes, format, file, options);
+    OpenMeshInput input;
+    if (format == "ply") input = transcodePly(bytes, file, options);
+    else if (format == "stl") {
+        precheckStl(bytes, file, options);
+        input.bytes = bytes;
+    } else throw InputError(file, "unknown format '" + format + "'");
 
     // OpenMesh reports through omerr()/omlog(); libraries never print.
     omerr().disable();
@@ -553,7 +561,7 @@ RawMesh readOffPlyStl(std::string_view bytes, const std::string& format, const f
     mesh.request_vertex_normals();
     OpenMesh::IO::Options readOptions = OpenMesh::IO::Options::VertexNormal;
     if (format == "stl" && isBinaryStl(bytes)) readOptions += OpenMesh::IO::Options::Binary;
-    std::istringstream stream{checked};
+    std::istringstream stream{std::move(input.bytes)};
     bool ok = false;
     try {
         ok = OpenMesh::IO::read_mesh(mesh, stream, "." + format, readOptions);
@@ -571,12 +579,7 @@ RawMesh readOffPlyStl(std::string_view bytes, const std::string& format, const f
         const auto& p = mesh.point(vh);
         out.positions.emplace_back(p[0], p[1], p[2]);
     }
-    // OpenMesh leaves the VertexNormal option set (and the normals unset) when the file has
-    // none, so ask the canonical PLY header.
-    const bool fileHasNormals =
-        format == "ply" && std::string_view(checked).substr(0, checked.find("end_header")).find("property float nx\n") !=
-                               std::string_view::npos;
-    if (fileHasNormals && readOptions.check(OpenMesh::IO::Options::VertexNormal)) {
+    if (input.hasNormals) {
         out.normals.reserve(mesh.n_vertices());
         for (const auto vh : mesh.vertices()) {
             const auto& n = mesh.normal(vh);
@@ -586,15 +589,9 @@ RawMesh readOffPlyStl(std::string_view bytes, const std::string& format, const f
     std::vector<std::uint32_t> corners;
     for (const auto fh : mesh.faces()) {
         corners.clear();
-        for (const auto vh : mesh.fv_ccw_range(fh)) corners.push_back(std::uint32_t(vh.idx()));
-        if (corners.size() < 3) continue;
         // fv_ccw_range runs in the face's own order (counter-clockwise around its normal).
-        const std::size_t added = corners.size() - 2;
-        if (out.triangles.size() + added > options.maxTriangles)
-            throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " triangles (see --max-triangles)");
-        for (std::size_t i = 1; i + 1 < corners.size(); ++i)
-            out.triangles.push_back({corners[0], corners[i], corners[i + 1]});
-        out.polygonTriangles.push_back(std::uint32_t(added));
+        for (const auto vh : mesh.fv_ccw_range(fh)) corners.push_back(std::uint32_t(vh.idx()));
+        appendFan(out, corners, file, options);
     }
     if (out.triangles.empty()) throw InputError(file, "no faces");
     return out;
