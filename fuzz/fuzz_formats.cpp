@@ -19,32 +19,29 @@ namespace {
 
 using namespace vtex::octree;
 
-std::uint64_t loadU64(const std::string& bytes, std::size_t at) {
-    std::uint64_t v = 0;
-    for (int i = 0; i < 8; ++i) v |= std::uint64_t(std::uint8_t(bytes[at + std::size_t(i)])) << (8 * i);
-    return v;
-}
 void storeU64(std::string& bytes, std::size_t at, std::uint64_t v) {
-    for (int i = 0; i < 8; ++i) bytes[at + std::size_t(i)] = char((v >> (8 * i)) & 0xFF);
+    detail::ByteWriter w;
+    w.u64(v);
+    bytes.replace(at, 8, w.str());
 }
 
 // Rewrites the payload checksums of the sections that lie inside the file, then the table's
-// checksum over bytes 0–15 and the table (docs/formats.md, "Container").
+// guard (docs/formats.md, "Container").
 void reseal(std::string& bytes) {
     if (bytes.size() < detail::kHeaderSize) return;
-    std::uint32_t count = 0;
-    for (int i = 0; i < 4; ++i) count |= std::uint32_t(std::uint8_t(bytes[12 + std::size_t(i)])) << (8 * i);
+    detail::ByteReader header(std::string_view(bytes).substr(12));
+    const std::uint32_t count = header.u32();
     if (count > detail::kMaxSections) return;
     const std::size_t tableEnd = detail::kHeaderSize + detail::kTableEntrySize * count;
     if (tableEnd > bytes.size()) return;
     for (std::size_t s = 0; s < count; ++s) {
         const std::size_t entry = detail::kHeaderSize + detail::kTableEntrySize * s;
-        const std::uint64_t offset = loadU64(bytes, entry + 8), size = loadU64(bytes, entry + 16);
+        detail::ByteReader place(std::string_view(bytes).substr(entry + 8));
+        const std::uint64_t offset = place.u64(), size = place.u64();
         if (offset <= bytes.size() && size <= bytes.size() - offset)
             storeU64(bytes, entry + 24, detail::checksum(std::string_view(bytes).substr(offset, size)));
     }
-    std::string guarded = bytes.substr(0, 16) + bytes.substr(detail::kHeaderSize, tableEnd - detail::kHeaderSize);
-    storeU64(bytes, 16, detail::checksum(guarded));
+    storeU64(bytes, 16, detail::tableChecksum(bytes, tableEnd));
 }
 
 }  // namespace

@@ -26,14 +26,14 @@ std::string printableTag(std::string_view raw) {
     return tag;
 }
 
+}  // namespace
+
 std::uint64_t tableChecksum(std::string_view bytes, std::size_t tableEnd) {
     // The first 16 bytes (magic, version, count) and the table, skipping the checksum field.
     std::string guarded(bytes.substr(0, 16));
     guarded.append(bytes.substr(kHeaderSize, tableEnd - kHeaderSize));
     return checksum(guarded);
 }
-
-}  // namespace
 
 std::string writeContainer(std::string_view magic, std::uint32_t version,
                            const std::vector<OutSection>& sections) {

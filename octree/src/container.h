@@ -95,6 +95,9 @@ inline constexpr std::size_t kTableEntrySize = 32;
 inline constexpr std::uint32_t kMaxSections = 64;
 
 std::uint64_t checksum(std::string_view bytes);
+/// The header's guard: the checksum of bytes 0–15 and of the section table, which ends at
+/// `tableEnd`.
+std::uint64_t tableChecksum(std::string_view bytes, std::size_t tableEnd);
 
 std::string writeContainer(std::string_view magic, std::uint32_t version,
                            const std::vector<OutSection>& sections);
