@@ -281,8 +281,8 @@ TEST(Malformed, FuzzPlyTokenOutOfStepBecomesACornerCount) {
     const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                              "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
     expectRefused("fuzz_oom.ply", head + "0 0 0\n1 0 0\n0 1 0 4088888888888\n3 0 1 2\n", "record 0: '4088888888888' does not read as uint8");
-    // Values are checked against their declared types: a negative or fractional count, a
-    // corner that is not an integer, a coordinate that is not a number, a record cut short.
+    // Values are checked against their declared types: a negative count, a corner that is
+    // not an integer, a coordinate that is not a number, a record cut short.
     expectRefused("negative_count.ply",
                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                   "element face 1\nproperty list int int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n-1 0 1 2\n",
@@ -307,12 +307,9 @@ TEST(Malformed, OffValuesOpenMeshReadOutOfStep) {
     // A face colour of 4·10⁹ became the next face's corner count in OpenMesh (out of memory);
     // now the colour is read as a colour and the file is fine.
     const std::string square = "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
-    EXPECT_EQ(ingest::loadMesh([&] {
-                  const fs::path path = dir() / "colour_count.off";
-                  test::writeBytes(path, square + "3 0 1 2 4000000000\n3 0 2 3\n");
-                  return path;
-              }()).triangles.size(),
-              2u);
+    const fs::path colourCount = dir() / "colour_count.off";
+    test::writeBytes(colourCount, square + "3 0 1 2 4000000000\n3 0 2 3\n");
+    EXPECT_EQ(ingest::loadMesh(colourCount).triangles.size(), 2u);
     // "nan" stopped OpenMesh's stream (then "no faces"); now the coordinate is refused by name.
     expectRefused("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", "NaN or infinite coordinate at vertex 1");
     // NOFF vertex lines without a normal were read across line ends.
