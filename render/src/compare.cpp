@@ -83,6 +83,55 @@ double meanSsim(const Image& a, const Image& b) {
     return sum / double(x.size());
 }
 
+std::array<double, 3> channelMeans(const Image& image) {
+    std::array<double, 3> sum{};
+    for (std::size_t p = 0; p < image.pixels(); ++p)
+        for (int c = 0; c < 3; ++c) sum[std::size_t(c)] += image.rgba[4 * p + std::size_t(c)];
+    for (double& s : sum) s /= double(image.pixels());
+    return sum;
+}
+
+constexpr int kBlock = 4;  // the coarse scale of the error split, in pixels
+
+int blockCount(int pixels) { return (pixels + kBlock - 1) / kBlock; }
+
+std::size_t blockOf(const Image& image, std::size_t pixel) {
+    const std::size_t x = pixel % std::size_t(image.width), y = pixel / std::size_t(image.width);
+    return (y / kBlock) * std::size_t(blockCount(image.width)) + x / kBlock;
+}
+
+// R, G, B means of every 4×4 block, row-major; a border block averages the pixels it has.
+std::vector<double> blockMeans(const Image& image) {
+    const std::size_t blocks = std::size_t(blockCount(image.width)) * std::size_t(blockCount(image.height));
+    std::vector<double> sum(3 * blocks, 0.0);
+    std::vector<int> count(blocks, 0);
+    for (std::size_t p = 0; p < image.pixels(); ++p) {
+        const std::size_t b = blockOf(image, p);
+        for (std::size_t c = 0; c < 3; ++c) sum[3 * b + c] += image.rgba[4 * p + c];
+        ++count[b];
+    }
+    for (std::size_t b = 0; b < blocks; ++b)
+        for (std::size_t c = 0; c < 3; ++c) sum[3 * b + c] /= count[b];
+    return sum;
+}
+
+// rmseCoarse and rmsePixel of the header's split.
+void splitByScale(const Image& a, const Image& b, ImageComparison& result) {
+    const std::vector<double> meansA = blockMeans(a), meansB = blockMeans(b);
+    double coarse = 0;
+    for (std::size_t i = 0; i < meansA.size(); ++i) coarse += (meansA[i] - meansB[i]) * (meansA[i] - meansB[i]);
+    double pixel = 0;
+    for (std::size_t p = 0; p < a.pixels(); ++p) {
+        const std::size_t k = blockOf(a, p);
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double d = (a.rgba[4 * p + c] - meansA[3 * k + c]) - (b.rgba[4 * p + c] - meansB[3 * k + c]);
+            pixel += d * d;
+        }
+    }
+    result.rmseCoarse = std::sqrt(coarse / double(meansA.size()));
+    result.rmsePixel = std::sqrt(pixel / (3.0 * double(a.pixels())));
+}
+
 }  // namespace
 
 ImageComparison compareImages(const Image& a, const Image& b) {
@@ -90,7 +139,10 @@ ImageComparison compareImages(const Image& a, const Image& b) {
     ImageComparison result;
     result.width = a.width;
     result.height = a.height;
-    if (a.pixels() == 0) return result;
+    if (a.pixels() == 0) {
+        result.bias.fill(std::numeric_limits<double>::quiet_NaN());  // meanB is 0 (of nothing)
+        return result;
+    }
     double total = 0;
     for (std::size_t p = 0; p < a.pixels(); ++p) {
         const double squared = pixelSquaredError(a, b, p);
@@ -106,6 +158,12 @@ ImageComparison compareImages(const Image& a, const Image& b) {
     result.rmse = std::sqrt(mse);
     result.psnr = mse > 0 ? -10 * std::log10(mse) : std::numeric_limits<double>::infinity();
     result.ssim = meanSsim(a, b);
+    result.meanA = channelMeans(a);
+    result.meanB = channelMeans(b);
+    for (std::size_t c = 0; c < 3; ++c)
+        result.bias[c] = result.meanB[c] != 0 ? result.meanA[c] / result.meanB[c] - 1
+                                              : std::numeric_limits<double>::quiet_NaN();
+    splitByScale(a, b, result);
     return result;
 }
 

@@ -5,10 +5,20 @@
 /// the PNG preview shows as white), SSIM (Wang, Bovik, Sheikh and Simoncelli 2004) on linear
 /// luminance with an 11×11 Gaussian window of σ = 1.5, K₁ = 0.01, K₂ = 0.03 and dynamic range 1,
 /// the window truncated and renormalised at the borders so every pixel counts.
+///
+/// The error is also split by scale, to tell a wrong brightness or blur from pixel noise: the
+/// coarse error is the RMSE between the two images' 4×4 box means (a block cut by the right or
+/// bottom border is the mean of the pixels it has, and counts as one block like the others); the
+/// pixel error is the RMSE of what the box means leave out, (a − up(box₄ a)) − (b − up(box₄ b)),
+/// with up() giving every pixel its block's mean. When width and height are multiples of 4 the
+/// two are orthogonal and rmse² = rmseCoarse² + rmsePixel² (to rounding); otherwise the border
+/// blocks weigh as whole blocks in rmseCoarse but by their pixels in rmse, and the sum is only
+/// approximate.
 #pragma once
 
 #include <vtex/render/image.h>
 
+#include <array>
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -24,6 +34,12 @@ struct ImageComparison {
     double ssim = 1;                                            ///< mean SSIM of the luminance
     int worstX = 0, worstY = 0;                                 ///< the pixel of largest RGB error
     double worstError = 0;                                      ///< its RMS over R, G, B
+    std::array<double, 3> meanA{}, meanB{};                     ///< mean R, G, B over all pixels
+    /// meanA / meanB − 1 per channel (a's relative brightness error when b is the truth); NaN
+    /// where meanB is 0.
+    std::array<double, 3> bias{};
+    double rmseCoarse = 0;                                      ///< RMSE of the 4×4 box means
+    double rmsePixel = 0;                                       ///< RMSE of the residuals below 4×4
 };
 
 /// Compares two images of equal size. Throws std::invalid_argument when the sizes differ.
