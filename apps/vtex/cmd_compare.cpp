@@ -1,4 +1,5 @@
-// `vtex compare a.exr b.exr [--json] [--diff heat.png]`: RMSE, PSNR and SSIM between two images.
+// `vtex compare a.exr b.exr [--json] [--diff heat.png]`: RMSE, PSNR and SSIM between two images, the
+// channel means and a's bias against b, and the RMSE split into 4×4-block and pixel scales.
 #include "cli.h"
 
 #include <vtex/core/error.h>
@@ -6,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -22,10 +24,59 @@ std::string joinNames(const std::vector<std::string>& names) {
     return joined.empty() ? "none" : joined;
 }
 
+// JSON has no NaN or infinity: such a value is null (a bias against a black channel, the PSNR
+// of identical images).
+nlohmann::json finiteOrNull(double value) {
+    return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+nlohmann::json triple(const std::array<double, 3>& v, bool nullable) {
+    nlohmann::json j = nlohmann::json::array();
+    for (double x : v) j.push_back(nullable ? finiteOrNull(x) : nlohmann::json(x));
+    return j;
+}
+
+nlohmann::json toJson(const render::ImageComparison& c, const std::string& a, const std::string& b) {
+    return {{"a", a},
+            {"b", b},
+            {"width", c.width},
+            {"height", c.height},
+            {"rmse", c.rmse},
+            {"psnr", finiteOrNull(c.psnr)},
+            {"ssim", c.ssim},
+            {"worst_pixel", {{"x", c.worstX}, {"y", c.worstY}, {"error", c.worstError}}},
+            {"mean_a", triple(c.meanA, false)},
+            {"mean_b", triple(c.meanB, false)},
+            {"bias", triple(c.bias, true)},
+            {"rmse_coarse", c.rmseCoarse},
+            {"rmse_pixel", c.rmsePixel}};
+}
+
+// "+12.345%", or "n/a" where b's channel is black.
+std::string percent(double bias) {
+    if (!std::isfinite(bias)) return "n/a";
+    char text[32];
+    std::snprintf(text, sizeof text, "%+.3f%%", 100 * bias);
+    return text;
+}
+
+void printText(const render::ImageComparison& c) {
+    char line[512];
+    std::snprintf(line, sizeof line, "RMSE %.6g  PSNR %s dB  SSIM %.6f  worst pixel (%d, %d) error %.6g\n", c.rmse,
+                  std::isfinite(c.psnr) ? std::to_string(c.psnr).c_str() : "inf", c.ssim, c.worstX, c.worstY,
+                  c.worstError);
+    std::cout << line;
+    std::snprintf(line, sizeof line, "RMSE 4x4 blocks %.6g  pixel %.6g  mean A %.6g %.6g %.6g  mean B %.6g %.6g %.6g  ",
+                  c.rmseCoarse, c.rmsePixel, c.meanA[0], c.meanA[1], c.meanA[2], c.meanB[0], c.meanB[1], c.meanB[2]);
+    std::cout << line << "bias " << percent(c.bias[0]) << ' ' << percent(c.bias[1]) << ' ' << percent(c.bias[2])
+              << '\n';
+}
+
 const bool registered = registerCommand(60, [](CLI::App& app) -> Action {
     app.name("compare");
     app.description("Measure the error between two images: RMSE (linear RGB), PSNR (peak 1), SSIM (luminance), "
-                    "the worst pixel; optionally a heat map of the difference");
+                    "the worst pixel, the R, G, B means and A's bias against B, the RMSE of the 4x4-block "
+                    "means and of the pixel-scale rest; optionally a heat map of the difference");
     struct Options {
         std::string a, b, diff;
         bool json = false;
@@ -49,21 +100,10 @@ const bool registered = registerCommand(60, [](CLI::App& app) -> Action {
                                        std::to_string(a.height) + ")");
         const render::ImageComparison c = render::compareImages(a, b);
         if (!o->diff.empty()) render::writePng(render::errorHeatMap(a, b, c.worstError), o->diff);
-        if (o->json) {
-            nlohmann::json j = {{"a", o->a},           {"b", o->b},
-                                {"width", c.width},    {"height", c.height},
-                                {"rmse", c.rmse},      {"ssim", c.ssim},
-                                {"worst_pixel", {{"x", c.worstX}, {"y", c.worstY}, {"error", c.worstError}}}};
-            // JSON has no infinity: identical images have no finite PSNR.
-            j["psnr"] = std::isfinite(c.psnr) ? nlohmann::json(c.psnr) : nlohmann::json(nullptr);
-            std::cout << j.dump(2) << '\n';
-            return;
-        }
-        char line[256];
-        std::snprintf(line, sizeof line, "RMSE %.6g  PSNR %s dB  SSIM %.6f  worst pixel (%d, %d) error %.6g\n",
-                      c.rmse, std::isfinite(c.psnr) ? std::to_string(c.psnr).c_str() : "inf", c.ssim, c.worstX,
-                      c.worstY, c.worstError);
-        std::cout << line;
+        if (o->json)
+            std::cout << toJson(c, o->a, o->b).dump(2) << '\n';
+        else
+            printText(c);
     };
 });
 

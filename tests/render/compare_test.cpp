@@ -1,5 +1,7 @@
 // `vtex compare` and its metrics: zero error against itself, the known RMSE and PSNR of a
-// known perturbation, SSIM's defining properties, and exit 3 for images that cannot be compared.
+// known perturbation, SSIM's defining properties, hand-derived channel biases and 4×4/pixel error
+// splits (a full-block image and one with border blocks), and exit 3 for images that cannot be
+// compared.
 #include "run_vtex.h"
 
 #include <vtex/render/compare.h>
@@ -30,6 +32,22 @@ Image noiseImage(int w, int h, unsigned seed) {
         for (int c = 0; c < 3; ++c) image.rgba[4 * p + c] = value(rng);
         image.rgba[4 * p + 3] = 1;
     }
+    return image;
+}
+
+// An 8×4 image with structure in every channel, so a split that mixed up a's and b's block means
+// would not come out zero by luck. Channel means: R 0.1 + 0.05·3.5 = 0.275, G 0.2 + 0.1·1.5 = 0.35,
+// B half 0.5 and half 0.1 = 0.3.
+Image rampImage() {
+    Image image(8, 4, false);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 8; ++x) {
+            float* p = &image.rgba[4 * std::size_t(y * 8 + x)];
+            p[0] = 0.1f + 0.05f * float(x);
+            p[1] = 0.2f + 0.1f * float(y);
+            p[2] = (x + y) % 2 == 0 ? 0.5f : 0.1f;
+            p[3] = 1;
+        }
     return image;
 }
 
@@ -85,6 +103,91 @@ TEST(Compare, SsimIsSymmetricBoundedAndFallsWithStructuralNoise) {
     EXPECT_LT(compareImages(a, half).ssim, 1.0);
 }
 
+TEST(Compare, AConstantOffsetIsAllBiasAndCoarseError) {
+    // a = b + δ everywhere: bias δ / mean(b) per channel, the whole error at the 4×4 scale.
+    const Image b = rampImage();
+    Image a = b;
+    for (std::size_t p = 0; p < a.pixels(); ++p)
+        for (int c = 0; c < 3; ++c) a.rgba[4 * p + c] += 0.05f;
+    const auto c = compareImages(a, b);
+    EXPECT_NEAR(c.meanB[0], 0.275, 1e-7);
+    EXPECT_NEAR(c.meanB[1], 0.35, 1e-7);
+    EXPECT_NEAR(c.meanB[2], 0.3, 1e-7);
+    EXPECT_NEAR(c.meanA[1], 0.4, 1e-7);
+    EXPECT_NEAR(c.bias[0], 0.05 / 0.275, 1e-6);
+    EXPECT_NEAR(c.bias[1], 0.05 / 0.35, 1e-6);
+    EXPECT_NEAR(c.bias[2], 0.05 / 0.3, 1e-6);
+    EXPECT_NEAR(c.rmseCoarse, 0.05, 1e-7);
+    EXPECT_NEAR(c.rmsePixel, 0, 1e-7);
+}
+
+TEST(Compare, BiasIsPerChannelAndRelativeToTheSecondImage) {
+    // a = (1.1 R, 0.9 G, 1.3 B) of b: bias +0.1, −0.1, +0.3 (b/a − 1 would give −0.091, +0.111, −0.231).
+    const Image b = rampImage();
+    Image a = b;
+    const float scale[3] = {1.1f, 0.9f, 1.3f};
+    for (std::size_t p = 0; p < a.pixels(); ++p)
+        for (int c = 0; c < 3; ++c) a.rgba[4 * p + c] *= scale[c];
+    const auto c = compareImages(a, b);
+    EXPECT_NEAR(c.bias[0], 0.1, 1e-6);
+    EXPECT_NEAR(c.bias[1], -0.1, 1e-6);
+    EXPECT_NEAR(c.bias[2], 0.3, 1e-6);
+
+    const Image black(8, 4, false);
+    const auto againstBlack = compareImages(a, black);
+    for (double bias : againstBlack.bias) EXPECT_TRUE(std::isnan(bias));
+}
+
+TEST(Compare, ACheckerboardIsAllPixelError) {
+    // a = b ± s alternating per pixel: every 4×4 block averages it away (coarse 0, mean 0), the
+    // pixel residual is ±s everywhere.
+    const Image b = rampImage();
+    Image a = b;
+    for (std::size_t p = 0; p < a.pixels(); ++p) {
+        const std::size_t x = p % 8, y = p / 8;
+        for (int c = 0; c < 3; ++c) a.rgba[4 * p + c] += (x + y) % 2 == 0 ? 0.04f : -0.04f;
+    }
+    const auto c = compareImages(a, b);
+    EXPECT_NEAR(c.rmseCoarse, 0, 1e-7);
+    EXPECT_NEAR(c.rmsePixel, 0.04, 1e-7);
+    EXPECT_NEAR(c.rmse, 0.04, 1e-7);
+    for (double bias : c.bias) EXPECT_NEAR(bias, 0, 1e-6);
+}
+
+TEST(Compare, BorderBlocksAverageThePixelsTheyHave) {
+    // 6×5: blocks of 4×4, 2×4, 4×1 and 2×1 pixels. G off by δ in column 5 only (5 of 30 pixels):
+    // the two right blocks have mean δ/2 (not δ/4 or δ/16, as padding would give), so
+    // rmseCoarse² = 2·(δ/2)² / (4 blocks · 3 channels) = δ²/24, and their 10 pixels have residual
+    // ±δ/2: rmsePixel² = 10·δ²/4 / 90 = δ²/36. rmse² = 5δ²/90 = δ²/18 < δ²/24 + δ²/36: border
+    // blocks make the split approximate.
+    const double delta = 0.12;
+    Image b(6, 5, false);
+    for (std::size_t p = 0; p < b.pixels(); ++p)
+        for (int c = 0; c < 4; ++c) b.rgba[4 * p + c] = 0.5f;
+    Image a = b;
+    for (int y = 0; y < 5; ++y) a.rgba[4 * std::size_t(y * 6 + 5) + 1] += float(delta);
+    const auto c = compareImages(a, b);
+    EXPECT_NEAR(c.rmseCoarse, delta / std::sqrt(24.0), 1e-7);
+    EXPECT_NEAR(c.rmsePixel, delta / 6, 1e-7);
+    EXPECT_NEAR(c.rmse, delta / std::sqrt(18.0), 1e-7);
+    EXPECT_NEAR(c.bias[1], delta / 6 / 0.5, 1e-6);
+    EXPECT_NEAR(c.bias[0], 0, 1e-12);
+}
+
+TEST(Compare, WholeBlocksSplitTheSquaredErrorExactly) {
+    // Width and height multiples of 4: rmse² = rmseCoarse² + rmsePixel² (orthogonal parts).
+    for (unsigned seed = 10; seed < 20; ++seed) {
+        const auto c = compareImages(noiseImage(32, 24, seed), noiseImage(32, 24, seed + 100));
+        EXPECT_NEAR(c.rmse * c.rmse, c.rmseCoarse * c.rmseCoarse + c.rmsePixel * c.rmsePixel, 1e-12) << seed;
+        EXPECT_GT(c.rmseCoarse, 0);
+        EXPECT_GT(c.rmsePixel, c.rmseCoarse) << "independent noise is mostly pixel-scale";
+    }
+    const auto self = compareImages(rampImage(), rampImage());
+    EXPECT_EQ(self.rmseCoarse, 0);
+    EXPECT_EQ(self.rmsePixel, 0);
+    for (double bias : self.bias) EXPECT_EQ(bias, 0);
+}
+
 TEST(Compare, CommandLineReportsTheMetricsAndWritesAHeatMap) {
     const Image a = noiseImage(16, 12, 5);
     Image b = a;
@@ -98,11 +201,31 @@ TEST(Compare, CommandLineReportsTheMetricsAndWritesAHeatMap) {
     EXPECT_NEAR(j["rmse"].get<double>(), 0.1 / std::sqrt(3.0), 1e-6);
     EXPECT_NEAR(j["psnr"].get<double>(), -10 * std::log10(0.01 / 3), 1e-3);
     EXPECT_TRUE(fs::file_size(scratch("heat.png")) > 0);
+    // b's red 0.1 above a's everywhere (16×12: whole blocks): all bias and coarse error, in red.
+    ASSERT_EQ(j["mean_a"].size(), 3u);
+    EXPECT_NEAR(j["mean_b"][0].get<double>() - j["mean_a"][0].get<double>(), 0.1, 1e-6);
+    EXPECT_NEAR(j["mean_a"][1].get<double>(), j["mean_b"][1].get<double>(), 1e-12);
+    EXPECT_NEAR(j["bias"][0].get<double>(), -0.1 / j["mean_b"][0].get<double>(), 1e-6);
+    EXPECT_EQ(j["bias"][2].get<double>(), 0);
+    EXPECT_NEAR(j["rmse_coarse"].get<double>(), 0.1 / std::sqrt(3.0), 1e-6);
+    EXPECT_NEAR(j["rmse_pixel"].get<double>(), 0, 1e-6);
 
     const auto self = runVtex({"compare", scratch("a.exr").string(), scratch("a.exr").string(), "--json"});
     ASSERT_EQ(self.exitStatus, 0) << self.err;
     EXPECT_EQ(nlohmann::json::parse(self.out)["rmse"].get<double>(), 0);
     EXPECT_TRUE(nlohmann::json::parse(self.out)["psnr"].is_null());
+
+    // Against a black image the bias has no value: null, not NaN (which JSON cannot hold).
+    vtex::render::writeExr(Image(16, 12, false), scratch("black.exr"));
+    const auto black = runVtex({"compare", scratch("a.exr").string(), scratch("black.exr").string(), "--json"});
+    ASSERT_EQ(black.exitStatus, 0) << black.err;
+    const auto jb = nlohmann::json::parse(black.out);
+    for (int c = 0; c < 3; ++c) EXPECT_TRUE(jb["bias"][c].is_null()) << jb.dump();
+
+    const auto text = runVtex({"compare", scratch("a.exr").string(), scratch("b.exr").string()});
+    ASSERT_EQ(text.exitStatus, 0) << text.err;
+    EXPECT_NE(text.out.find("RMSE 4x4 blocks"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("bias "), std::string::npos) << text.out;
 }
 
 TEST(Compare, ImagesThatCannotBeComparedAreBadInput) {
