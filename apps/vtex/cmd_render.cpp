@@ -16,6 +16,7 @@ struct RenderArgs : ImageCommandArgs {
     double lodBias = 0;
     std::string shading = "fast";
     double shadowRefresh = 0.25;
+    std::string hybrid = "on";
 };
 
 const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
@@ -34,6 +35,11 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
                    "query's (nearer 1: deeper voxels darker, less error, more time)")
         ->check(CLI::Range(0.001, 1.0))
         ->capture_default_str();
+    app.add_option("--hybrid", a->hybrid,
+                   "Trace a texel's source mesh where the footprint is finer than its volume is faithful "
+                   "(on, the default, for texels with a source) or always march the volume (off)")
+        ->check(CLI::IsMember({"on", "off"}))
+        ->capture_default_str();
     app.add_option("--shading", a->shading, "Micro-primitive reflectance: fast (SGGX visible-normal quadrature) or reference (the paper's integration)")
         ->check(CLI::IsMember({"fast", "reference"}))
         ->capture_default_str();
@@ -48,6 +54,7 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         options.shading = a->shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
         options.aovs = a->aovs;
         options.shadowRefresh = a->shadowRefresh;
+        options.hybrid = a->hybrid == "on";
         TerminalProgress progress(global);
         const render::RenderResult result = render::renderScene(scene, options, progress);
         writeImageOutputs(result, *a);

@@ -80,6 +80,7 @@ RenderStats summarize(const std::vector<Counters>& tileCounters, const SceneGeom
     st.voxelsVisited = total.voxels;
     st.reflectanceEvaluations = total.reflectance;
     st.levelHistogram = total.histogram;
+    st.meshSegments = total.mesh;
     return st;
 }
 

@@ -65,8 +65,10 @@ private:
 
 struct Counters {
     std::uint64_t primary = 0, shadow = 0, segments = 0, voxels = 0, reflectance = 0;
+    double mesh = 0;  ///< the hybrid's mesh shares of camera-ray segments, summed
     std::vector<double> histogram;
     void add(const Counters& o) {
+        mesh += o.mesh;
         primary += o.primary;
         shadow += o.shadow;
         segments += o.segments;

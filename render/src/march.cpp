@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <vector>
 
@@ -15,6 +16,7 @@ LevelChoice chooseLevel(double width, double lodBias, int maxLevel) {
     double level = double(maxLevel);
     if (std::isfinite(width) && width > 0) level = -std::log2(width);
     if (std::isnan(width) || width == INFINITY) level = 0;
+    c.requested = width == 0 ? std::numeric_limits<double>::infinity() : level - lodBias;
     level = std::clamp(level - lodBias, 0.0, double(std::max(maxLevel, 0)));
     c.level = level;
     c.coarse = int(std::floor(level));

@@ -11,11 +11,14 @@
 #include <vtex/core/error.h>
 #include <vtex/render/shading.h>
 #include <vtex/render/texel_march.h>
+#include <vtex/ingest/ingest.h>
+#include <vtex/octree/chord_transmittance.h>
 
 #include "footprint.h"
 #include "frame.h"
 #include "light_cache.h"
 #include "march.h"
+#include "source_bvh.h"
 #include "tracer.h"
 
 #include <Eigen/Dense>
@@ -60,11 +63,53 @@ constexpr double kTransmittanceCutoff = 1e-4;
 constexpr double kShadowConeScale = 2.0;
 // Lattice steps marched exactly from a shadow query before the lattice is looked up.
 constexpr double kExactLatticeSteps = 2.0;
+// Shadow rays from a source-mesh hit skip this much reference space where they leave it (the
+// reference renderer's gap, reference.cpp).
+constexpr double kSelfIntersectionGap = 1e-5;
+
+// Per-light state of a march: on the stack for up to 16 lights (every scene of the tests and
+// benchmarks), on the heap beyond, so that every light lights every voxel.
+template <class T>
+class PerLight {
+public:
+    explicit PerLight(std::size_t n) : mData(mSmall.data()) {
+        if (n > mSmall.size()) {
+            mLarge.resize(n);
+            mData = mLarge.data();
+        } else {
+            std::fill_n(mData, n, T{});  // only the lights there are: a track is 520 bytes
+        }
+    }
+    PerLight(const PerLight&) = delete;
+    PerLight& operator=(const PerLight&) = delete;
+    T& operator[](std::size_t i) { return mData[i]; }
+    const T& operator[](std::size_t i) const { return mData[i]; }
+
+private:
+    std::array<T, 16> mSmall;
+    std::vector<T> mLarge;
+    T* mData;
+};
+
+struct SpanResult {
+    Color radiance = Color::Zero();
+    double transmittance = 1;
+};
 
 struct TexelRuntime {
     std::unique_ptr<const MarchVolume> volume;
     double tau = 1;
     Material material;
+    /// The mesh/volume hybrid (docs/render.md, "Mesh where the volume is not faithful"): the
+    /// texel's source mesh, traced where a footprint asks for a level finer than `meshLevel`
+    /// (blended over the next level); no source, or the hybrid off: never.
+    std::shared_ptr<const ingest::TriangleMesh> sourceMesh;
+    std::unique_ptr<const detail::SourceBvh> source;
+    double meshLevel = std::numeric_limits<double>::infinity();
+    /// The mesh's share at continuous level `requested` (LevelChoice::requested).
+    double meshWeight(double requested) const {
+        return source ? std::clamp(requested - meshLevel, 0.0, 1.0) : 0.0;
+    }
 };
 
 struct PathState {
@@ -112,7 +157,7 @@ public:
                 break;
             }
             const auto rIn = entryCoords(prim, *hit, o, d, -1, Vec3::Zero());
-            if (rIn) marchSpan(prim, surface, *rIn, span.rOut, hit->t, span.tOut, state, counters);
+            if (rIn) marchSpan(prim, surface, *rIn, span.rOut, hit->t, span.tOut, d, state, counters);
             if (state.transmittance <= kTransmittanceCutoff) break;
             if (span.faceOut == 0) {
                 opaque(state, span.tOut, shadeFloor(prim, surface, span.rOut, d, span.tOut, state.transmittance, counters));
@@ -285,15 +330,29 @@ private:
         ++counters.shadow;
         return detail::walkShadowRay(
             mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, kTransmittanceCutoff,
-            [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool,
+            [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint,
                 double transmittance) {
                 const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
                 const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
-                const int level = shadowLevel(texel, width / localScale(prim.cell, 0.5 * (rIn + rOut), surface));
-                const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tau, p0, p1, level,
-                                                                    kTransmittanceCutoff / transmittance);
-                counters.voxels += seg.blocks;
-                return seg.transmittance;
+                const double localWidth = width / localScale(prim.cell, 0.5 * (rIn + rOut), surface);
+                // The hybrid's rule for shadows too: the source mesh where the footprint is finer
+                // than the volume is faithful, blended over the next level.
+                const double meshWeight =
+                    texel.meshWeight(chooseLevel(localWidth, mOptions.lodBias, texel.volume->maxLevel()).requested);
+                double result = 0;
+                if (meshWeight < 1) {
+                    const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tau, p0, p1,
+                                                                        shadowLevel(texel, localWidth),
+                                                                        kTransmittanceCutoff / transmittance);
+                    counters.voxels += seg.blocks;
+                    result = (1 - meshWeight) * seg.transmittance;
+                }
+                if (meshWeight > 0) {
+                    const double length = (p1 - p0).norm();
+                    const double sMin = startsAtHint ? (length > 0 ? kSelfIntersectionGap / length : 1.0) : 0.0;
+                    if (!texel.source->occluded(p0, p1, sMin)) result += meshWeight;
+                }
+                return result;
             });
     }
 
@@ -311,7 +370,7 @@ private:
     }
 
     void marchSpan(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, double tIn,
-                   double tOut, PathState& state, Counters& counters) const {
+                   double tOut, const Vec3& d, PathState& state, Counters& counters) const {
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
         const int primIndex = int(&prim - mTracer.prims().data());
         const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
@@ -331,9 +390,20 @@ private:
         double fineWeight = choice.fineWeight;
         if (fineWeight > 0 && fineWeight < mOptions.blendCutoff) fineWeight = 0;
         if (fineWeight > 1 - mOptions.blendCutoff) fineWeight = 1;
+        // The same cut-off for the mesh's share: a share below it is not traced, above 1 − it the
+        // volume is not marched.
+        double meshWeight = texel.meshWeight(choice.requested);
+        if (meshWeight > 0 && meshWeight < mOptions.blendCutoff) meshWeight = 0;
+        if (meshWeight > 1 - mOptions.blendCutoff) meshWeight = 1;
+        counters.mesh += meshWeight;
+        if (meshWeight >= 1) {
+            compositeSpan(traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid,
+                          state);
+            return;
+        }
         if (counters.histogram.size() < std::size_t(maxLevel + 1)) counters.histogram.resize(std::size_t(maxLevel + 1), 0.0);
-        if (fineWeight < 1) counters.histogram[std::size_t(choice.coarse)] += 1 - fineWeight;
-        if (fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += fineWeight;
+        if (fineWeight < 1) counters.histogram[std::size_t(choice.coarse)] += (1 - fineWeight) * (1 - meshWeight);
+        if (fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += fineWeight * (1 - meshWeight);
 
         // Light directions go to reference space through the inverse Jacobian of the tiled map,
         // taken once per span (the mild-deformation assumption again).
@@ -345,12 +415,8 @@ private:
         const Vec3 view = -dir;
         const Material& m = texel.material;
 
-        struct Result {
-            Color radiance = Color::Zero();
-            double transmittance = 1;
-        };
         const double startT = state.transmittance;
-        const std::size_t lights = std::min<std::size_t>(mScene.lights.size(), 16);
+        const std::size_t lights = mScene.lights.size();
         // The shadow rays of the first (coarse) march, by light: where along the span they were
         // taken and what they found. When the second (fine) march of the blend needs a shadow
         // (same rule: first lit voxel, then each time its transmittance has fallen to a
@@ -365,7 +431,7 @@ private:
             int count = 0;
             std::array<double, kTrackCapacity> s, t;
         };
-        std::array<ShadowTrack, 16> tracks;
+        PerLight<ShadowTrack> tracks(lights);
         // A directional light's direction and irradiance do not depend on the point, nor its
         // reference-space direction within the span: taken once per span.
         struct SpanLight {
@@ -376,7 +442,7 @@ private:
             Color e;
             std::optional<ReflectanceKernel> kernel;  ///< directional, usable, fast shading
         };
-        std::array<SpanLight, 16> spanLights;
+        PerLight<SpanLight> spanLights(lights);
         bool anyPointLight = false;
         const auto referenceLight = [&](const Vec3& lw, Vec3& lr) {
             lr = jtInv * lw;
@@ -401,14 +467,14 @@ private:
         const double shadowRefresh = std::clamp(mOptions.shadowRefresh, 1e-6, 1.0);
         const double reuseWeight = std::max(mOptions.reflectanceReuseWeight, 0.0);
         const auto run = [&](int level, bool record, double blendWeight) {
-            Result r;
-            std::array<octree::ReflectanceFactors, 16> lastReflectance;
-            std::array<bool, 16> haveReflectance{};
+            SpanResult r;
+            PerLight<octree::ReflectanceFactors> lastReflectance(lights);
+            PerLight<char> haveReflectance(lights);
             double reusedShare = 0;
-            std::array<double, 16> shadowT{};
-            std::array<double, 16> shadowAt{};  // local transmittance when the shadow was taken
-            std::array<bool, 16> shadowValid{};
-            std::array<int, 16> reuseAt{};      // reuse: index of the track's current ray
+            PerLight<double> shadowT(lights);
+            PerLight<double> shadowAt(lights);  // local transmittance when the shadow was taken
+            PerLight<char> shadowValid(lights);
+            PerLight<int> reuseAt(lights);      // reuse: index of the track's current ray
             counters.voxels += detail::march(*texel.volume, level, p0, dir, length,
                 [&](const GridVoxel& voxel, double s, double ds) {
                     const SggxMatrix& sMatrix = voxel.s;
@@ -468,8 +534,8 @@ private:
                             if (nearest >= 0) {
                                 shadowT[i] = track.t[std::size_t(nearest)];
                             } else {
-                                const Vec3 rc = cellPoint();
                                 const double width = kShadowConeScale * mConeSpread * (tIn + (tOut - tIn) * (sm / length));
+                                const Vec3 rc = cellPoint();
                                 if (sl.latticeSlot >= 0) {
                                     const SpanFrame frame{sl.lr, scale};
                                     shadowT[i] = nearAndCachedShadow(sl.latticeSlot, primIndex, rc, lw, width, counters, &frame);
@@ -507,25 +573,62 @@ private:
                 });
             return r;
         };
-        Result result;
+        SpanResult result;
         if (fineWeight >= 1) {
             result = run(choice.fine, false, 1.0);
         } else {
             result = run(choice.coarse, mOptions.shareShadowRays, 1 - fineWeight);
             if (fineWeight > 0) {
-                const Result fine = run(choice.fine, false, fineWeight);
+                const SpanResult fine = run(choice.fine, false, fineWeight);
                 const double w = fineWeight;
                 result.radiance = (1 - w) * result.radiance + w * fine.radiance;
                 result.transmittance = (1 - w) * result.transmittance + w * fine.transmittance;
             }
         }
+        if (meshWeight > 0) {
+            const SpanResult mesh = traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters);
+            result.radiance = (1 - meshWeight) * result.radiance + meshWeight * mesh.radiance;
+            result.transmittance = (1 - meshWeight) * result.transmittance + meshWeight * mesh.transmittance;
+        }
+        compositeSpan(result, choice.level, tMid, state);
+    }
+
+    static void compositeSpan(const SpanResult& result, double level, double tMid, PathState& state) {
         const double before = state.transmittance;
         state.radiance += before * result.radiance;
         state.transmittance = before * result.transmittance;
         const double absorbed = before - state.transmittance;
-        state.levelSum += absorbed * choice.level;
+        state.levelSum += absorbed * level;
         state.levelWeight += absorbed;
         state.noteOpacity(tMid, before, state.transmittance);
+    }
+
+    // The span through the texel's source mesh instead of its volume (the hybrid): the first
+    // triangle on the tiled reference-space segment p0 → p1, opaque and two-sided, shaded as the
+    // reference renderer shades it (the texel's material, the mesh's albedo, the normal taken
+    // to the world by the inverse transpose of the tiled map's Jacobian), its shadows by the
+    // hybrid rule of tracedShadow.
+    SpanResult traceSourceSpan(const Prim& prim, const SurfaceRuntime& surface, const TexelRuntime& texel, const Vec3& p0,
+                               const Vec3& p1, double tIn, double tOut, const Vec3& d, Counters& counters) const {
+        const auto hit = texel.source->intersect(p0, p1, 0);
+        if (!hit) return {};
+        const Vec3 rt = p0 + hit->s * (p1 - p0);
+        const Vec3 rc(rt.x() / surface.repeatU, rt.y() / surface.repeatV, rt.z());
+        const Vec3 x = prim.cell.map(rc);
+        Mat3 jacobian = prim.cell.jacobian(rc);
+        jacobian.col(0) /= surface.repeatU;
+        jacobian.col(1) /= surface.repeatV;
+        Vec3 n = jacobian.inverse().transpose() * hit->normal;
+        const double length = n.norm();
+        n = length > 0 && std::isfinite(length) ? Vec3(n / length) : Vec3(-d);
+        const double scale = localScale(prim.cell, rc, surface);
+        const int primIndex = int(&prim - mTracer.prims().data());
+        const double t = tIn + hit->s * (tOut - tIn);
+        const Color radiance = detail::shadePhong(
+            mScene.lights, x, n, n, -d, texel.material, hit->albedo, scale, [&](const Vec3& origin, const Vec3& l, double distance) {
+                return tracedShadow(origin, l, distance, mConeSpread * t, primIndex, rc, counters);
+            });
+        return {radiance, 0.0};
     }
 
     const Scene& mScene;
@@ -536,6 +639,23 @@ private:
     double mConeSpread;
     detail::LightTransmittanceCache mLightCache = makeLightCache();
 };
+
+// The finest level at which the volume lets through what the source mesh does, within
+// `tolerance` (absolute transmittance, mean over random chords of the whole texel): from the
+// level of least error, finer levels as long as each stays within the tolerance. Finer than
+// that, a voxel stands for a piece of one opaque surface that the exponential medium lets
+// light through (and shadows itself), and the hybrid traces the mesh instead.
+double faithfulLevel(const octree::Octree& tree, const detail::SourceBvh& source, double tolerance) {
+    const auto chords = octree::measureChordTransmittance(
+        tree, [&](const Vec3& a, const Vec3& b) { return !source.occluded(a, b, 0); });
+    if (chords.empty()) return std::numeric_limits<double>::infinity();
+    std::size_t best = 0;
+    for (std::size_t l = 1; l < chords.size(); ++l)
+        if (std::abs(chords[l].error()) < std::abs(chords[best].error())) best = l;
+    std::size_t level = best;
+    while (level + 1 < chords.size() && std::abs(chords[level + 1].error()) <= tolerance) ++level;
+    return double(level);
+}
 
 }  // namespace
 
@@ -556,9 +676,14 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
         auto tree = def.octree ? def.octree : std::make_shared<const octree::Octree>(octree::readVto(def.volume));
         if (tree->levels.empty() || tree->levels[0].empty())
             throw InputError(def.volume, "octree has no root");
-        t.volume = std::make_unique<const MarchVolume>(std::move(tree));
         t.tau = def.tau;
         t.material = def.material;
+        if (options.hybrid && (def.sourceData || !def.source.empty())) {
+            t.sourceMesh = def.sourceData ? def.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source));
+            t.source = std::make_unique<const detail::SourceBvh>(*t.sourceMesh, tree->info.source);
+            t.meshLevel = faithfulLevel(*tree, *t.source, options.hybridTolerance);
+        }
+        t.volume = std::make_unique<const MarchVolume>(std::move(tree));
     }
 
     const detail::CameraRays camera(scene.camera, width, height);
@@ -599,6 +724,8 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
 
     const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - renderStart).count();
     result.stats = detail::summarize(tileCounters, geometry, threads, width, height, strata * strata, wallSeconds, loadSeconds);
+    for (const TexelRuntime& t : texels)
+        if (t.volume) result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
     result.image = std::move(image);
     result.warnings = scene.warnings;
     return result;
@@ -621,6 +748,10 @@ void writeStatsJson(const RenderStats& s, const std::filesystem::path& file) {
     j["reflectance_evaluations"] = s.reflectanceEvaluations;
     j["level_histogram"] = s.levelHistogram;
     j["mean_level"] = s.meanLevel();
+    if (s.renderer == "texel") {
+        j["mesh_segments"] = s.meshSegments;
+        j["mesh_levels"] = s.meshLevels;
+    }
     if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;
     writeFileAtomically(file, j.dump(2) + "\n");
 }

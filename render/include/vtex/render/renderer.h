@@ -68,6 +68,13 @@ struct RenderOptions {
     /// reference for more time (docs/render.md, "Shadows": on the bush terrain 0.7 lowers the RMSE
     /// by 14–22 % at middle and far distances). 1: a query at every voxel that absorbs anything.
     double shadowRefresh = 0.25;
+    /// The mesh/volume hybrid (docs/render.md, "Mesh where the volume is not faithful"): a texel
+    /// with a `source` mesh is traced as that mesh where a footprint asks for a level finer than
+    /// the finest level whose chord transmittance is within `hybridTolerance` of the mesh's
+    /// visibility (measured per texel at load, octree::measureChordTransmittance), blended over
+    /// one level. false: always the volume.
+    bool hybrid = true;
+    double hybridTolerance = 0.02;
 };
 
 struct RenderStats {
@@ -86,6 +93,10 @@ struct RenderStats {
     /// Weight of each octree level in the level choices (blend weights summed over the cell
     /// segments of camera rays); index = level.
     std::vector<double> levelHistogram;
+    /// The hybrid's share of camera-ray segments traced through the source mesh (blend weights
+    /// summed), and per texel the level past which its mesh takes over (−1: no mesh).
+    double meshSegments = 0;
+    std::vector<double> meshLevels;
     /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:
     /// the deformed copies).
     std::uint64_t referenceTriangles = 0;

@@ -29,6 +29,9 @@ namespace vtex::render {
 /// weights 1 − fineWeight and fineWeight.
 struct LevelChoice {
     double level = 0;   ///< the continuous level, after bias and clamping
+    /// The continuous level after bias, before clamping (+∞ for a zero width): how much finer
+    /// than the deepest level the footprint is, for the mesh/volume switch.
+    double requested = 0;
     int coarse = 0;     ///< floor(level)
     int fine = 0;       ///< coarse + 1, or coarse at maxLevel
     double fineWeight = 0;

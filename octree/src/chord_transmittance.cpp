@@ -1,0 +1,141 @@
+// See chord_transmittance.h.
+#include <vtex/octree/chord_transmittance.h>
+
+#include <vtex/octree/voxel.h>
+
+#include <Eigen/Geometry>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace vtex::octree {
+namespace {
+
+// A pure function of its inputs (splitmix64 finaliser), so chords do not depend on threads.
+std::uint64_t mix(std::uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+
+struct ChordRng {
+    std::uint64_t state;
+    double next() {
+        state = mix(state);
+        return double(state >> 11) * 0x1.0p-53;
+    }
+};
+
+struct Chord {
+    Vec3 a, b, direction;
+    double length = 0;
+};
+
+// An isotropic uniform random line through the box [lo, lo + h]³: a uniform direction, then an
+// entry point uniform over the box's projection along it, drawn as a face facing −ω chosen with
+// probability ∝ |ω_axis| (the faces' projected areas) and a uniform point on that face.
+Chord randomChord(const Vec3& lo, double h, ChordRng& rng) {
+    const double z = 2 * rng.next() - 1, phi = 2 * std::numbers::pi * rng.next();
+    const double r = std::sqrt(std::max(0.0, 1 - z * z));
+    const Vec3 w(r * std::cos(phi), r * std::sin(phi), z);
+    const Vec3 aw = w.cwiseAbs();
+    const double pick = rng.next() * (aw.x() + aw.y() + aw.z());
+    const int axis = pick < aw.x() ? 0 : pick < aw.x() + aw.y() ? 1 : 2;
+    Vec3 entry = lo + h * Vec3(rng.next(), rng.next(), rng.next());
+    entry[axis] = w[axis] > 0 ? lo[axis] : lo[axis] + h;
+    // Exit: the nearest of the three far faces along w.
+    double t = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+        if (aw[k] < 1e-300) continue;
+        const double face = w[k] > 0 ? lo[k] + h : lo[k];
+        t = std::min(t, (face - entry[k]) / w[k]);
+    }
+    t = std::max(t, 0.0);
+    return {entry, entry + t * w, w, t};
+}
+
+// The optical depth ∫ρÂ of the segment a → b through `level` of `tree`.
+double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b) {
+    double depth = 0;
+    const Vec3 delta = b - a;
+    const double length = delta.norm();
+    if (!(length > 0)) return depth;
+    const Vec3 w = delta / length;
+    forEachVoxelOnSegment(tree, level, a, b, [&](const Octree::Found& found, double t0, double t1) {
+        const Mat3 s = unpackS(found.node->data);
+        depth += double(found.node->data.density) * std::sqrt(std::max(0.0, w.dot(s * w))) * (t1 - t0);
+    });
+    return depth;
+}
+
+}  // namespace
+
+void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b,
+                           const std::function<void(const Octree::Found&, double, double)>& visit) {
+    const double n = double(std::uint64_t(1) << level);
+    const Vec3 delta = b - a;
+    const double length = delta.norm();
+    if (!(length > 0) || !a.allFinite() || !b.allFinite()) return;
+    const Vec3 w = delta / length;
+    std::array<std::int64_t, 3> cell, step;
+    std::array<double, 3> next, inc;
+    for (int k = 0; k < 3; ++k) {
+        const double p = std::clamp(a[k] * n, 0.0, n - 1e-9);
+        cell[std::size_t(k)] = std::int64_t(p);
+        step[std::size_t(k)] = w[k] > 0 ? 1 : -1;
+        const bool moves = std::abs(w[k]) > 1e-300;
+        inc[std::size_t(k)] = moves ? 1 / (std::abs(w[k]) * n) : std::numeric_limits<double>::infinity();
+        const double boundary = w[k] > 0 ? double(cell[std::size_t(k)] + 1) : double(cell[std::size_t(k)]);
+        next[std::size_t(k)] = moves ? (boundary / n - a[k]) / w[k] : std::numeric_limits<double>::infinity();
+    }
+    const std::int64_t last = std::int64_t(n) - 1;
+    double t = 0;
+    while (t < length) {
+        const std::size_t k = next[0] <= next[1] && next[0] <= next[2] ? 0 : next[1] <= next[2] ? 1 : 2;
+        const double t1 = std::min(next[k], length);
+        if (const auto found = tree.find(level, std::uint32_t(cell[0]), std::uint32_t(cell[1]), std::uint32_t(cell[2])))
+            visit(*found, t, t1);
+        t = t1;
+        cell[k] += step[k];
+        next[k] += inc[k];
+        if (cell[k] < 0 || cell[k] > last) break;
+    }
+}
+
+std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+                                                          double tau, int chords, std::uint64_t seed) {
+    std::vector<ChordTransmittance> out(tree.levels.size());
+    if (chords <= 0) return out;
+    const std::size_t count = std::size_t(chords);
+    std::vector<Chord> lines(count);
+    std::vector<char> misses(count, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t j = r.begin(); j != r.end(); ++j) {
+            ChordRng rng{mix(seed ^ mix(0xC0FFEEull + std::uint64_t(j)))};
+            lines[j] = randomChord(Vec3::Zero(), 1.0, rng);
+            misses[j] = visible(lines[j].a, lines[j].b) ? 1 : 0;
+        }
+    });
+    double visibility = 0;
+    for (char m : misses) visibility += m;
+    visibility /= double(count);
+    for (std::size_t level = 0; level < tree.levels.size(); ++level) {
+        std::vector<double> transmittance(count);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t j = r.begin(); j != r.end(); ++j)
+                transmittance[j] = std::exp(-tau * chordDepth(tree, std::uint32_t(level), lines[j].a, lines[j].b));
+        });
+        double sum = 0;  // in chord order: the same whatever the schedule
+        for (double t : transmittance) sum += t;
+        out[level] = {visibility, sum / double(count)};
+    }
+    return out;
+}
+
+}  // namespace vtex::octree
