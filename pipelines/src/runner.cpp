@@ -94,6 +94,7 @@ render::RenderOptions renderOptions(const RenderStep& step) {
     o.height = step.height;
     o.spp = step.spp;
     o.lodBias = step.lodBias;
+    o.hybrid = step.hybrid;
     o.shading = step.shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
     return o;
 }
@@ -334,7 +335,8 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         r.describe = [&stages, step, self, bindings, boundScene, header] {
             std::ostringstream d;
             d << header << "render " << step.renderer << " " << step.mode << "\nsize " << step.width << "x" << step.height
-              << " spp " << step.spp << " lod_bias " << step.lodBias << " shading " << step.shading << "\nscene "
+              << " spp " << step.spp << " lod_bias " << step.lodBias << " shading " << step.shading
+              << " hybrid " << step.hybrid << "\nscene "
               << hashFile(step.scene) << "\n";
             const render::Scene scene = boundScene();
             for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";

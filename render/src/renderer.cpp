@@ -645,9 +645,9 @@ private:
 // level of least error, finer levels as long as each stays within the tolerance. Finer than
 // that, a voxel stands for a piece of one opaque surface that the exponential medium lets
 // light through (and shadows itself), and the hybrid traces the mesh instead.
-double faithfulLevel(const octree::Octree& tree, const detail::SourceBvh& source, double tolerance) {
+double faithfulLevel(const octree::Octree& tree, const detail::SourceBvh& source, double tau, double tolerance) {
     const auto chords = octree::measureChordTransmittance(
-        tree, [&](const Vec3& a, const Vec3& b) { return !source.occluded(a, b, 0); });
+        tree, [&](const Vec3& a, const Vec3& b) { return !source.occluded(a, b, 0); }, tau);
     if (chords.empty()) return std::numeric_limits<double>::infinity();
     std::size_t best = 0;
     for (std::size_t l = 1; l < chords.size(); ++l)
@@ -681,7 +681,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
         if (options.hybrid && (def.sourceData || !def.source.empty())) {
             t.sourceMesh = def.sourceData ? def.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source));
             t.source = std::make_unique<const detail::SourceBvh>(*t.sourceMesh, tree->info.source);
-            t.meshLevel = faithfulLevel(*tree, *t.source, options.hybridTolerance);
+            t.meshLevel = faithfulLevel(*tree, *t.source, def.tau, options.hybridTolerance);
         }
         t.volume = std::make_unique<const MarchVolume>(std::move(tree));
     }

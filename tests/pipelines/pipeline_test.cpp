@@ -107,6 +107,7 @@ texels = { cover = "grass" }
 name = "cross-hill"
 scene = "hill.toml"
 texels = { cover = "cross" }
+hybrid = false  # its volume, so that every change of the texel shows in the image
 
 [[compare]]
 name = "grass-vs-cross"

@@ -62,6 +62,9 @@ struct RenderStep {
     int spp = 1;
     double lodBias = 0;
     std::string shading = "fast";       ///< fast | reference
+    /// The texel renderer's mesh/volume hybrid (render::RenderOptions::hybrid) for texels with
+    /// a source: the pipeline binds each built texel's source mesh.
+    bool hybrid = true;
     /// texel (`vtex render`) | reference (`vtex reference`: the texels' source meshes instead of
     /// their volumes; lod_bias and shading do not apply)
     std::string renderer = "texel";

@@ -64,10 +64,10 @@ struct RenderOptions {
     double exactFloorShadowAbove = 0.05;
     /// Along a march, a voxel takes a new shadow query once the march's transmittance has fallen
     /// below this fraction of what it was at the last query, and reuses the last one otherwise;
-    /// in (0, 1]. Nearer 1: deeper voxels get their own, darker shadows — less error against the
-    /// reference for more time (docs/render.md, "Shadows": on the bush terrain 0.7 lowers the RMSE
-    /// by 14–22 % at middle and far distances). 1: a query at every voxel that absorbs anything.
-    double shadowRefresh = 0.25;
+    /// in (0, 1]. 1 (the default): a query at every voxel that absorbs anything, exact. Below 1
+    /// deeper voxels reuse shallower voxels' shadows and are too bright: on the bush field 0.25
+    /// raised the image mean by 14–32 % (docs/render.md, "Shadows").
+    double shadowRefresh = 1;
     /// The mesh/volume hybrid (docs/render.md, "Mesh where the volume is not faithful"): a texel
     /// with a `source` mesh is traced as that mesh where a footprint asks for a level finer than
     /// the finest level whose chord transmittance is within `hybridTolerance` of the mesh's
