@@ -11,14 +11,13 @@
 #include <vtex/core/error.h>
 #include <vtex/render/shading.h>
 #include <vtex/render/texel_march.h>
-#include <vtex/ingest/ingest.h>
-#include <vtex/octree/chord_transmittance.h>
 
 #include "footprint.h"
 #include "frame.h"
-#include "light_cache.h"
+#include "per_light.h"
+#include "shadow_queries.h"
+#include "texel_runtime.h"
 #include "march.h"
-#include "source_bvh.h"
 #include "tracer.h"
 
 #include <Eigen/Dense>
@@ -57,59 +56,20 @@ using detail::shadingNormal;
 
 double patchSize(const Prim& prim) { return detail::patchSize(prim.p); }
 
-constexpr double kTransmittanceCutoff = 1e-4;
+using detail::kTransmittanceCutoff;
+using detail::localScale;
+using detail::PerLight;
+using detail::ShadowQueries;
+using detail::TexelRuntime;
+using detail::tile;
+
 // Shadow rays from inside a texel march one level coarser than the camera ray (a cone twice as
 // wide): soft shadows need less detail than what is seen, and this halves their cost.
 constexpr double kShadowConeScale = 2.0;
-// Lattice steps marched exactly from a shadow query before the lattice is looked up.
-constexpr double kExactLatticeSteps = 2.0;
-// Shadow rays from a source-mesh hit skip this much reference space where they leave it (the
-// reference renderer's gap, reference.cpp).
-constexpr double kSelfIntersectionGap = 1e-5;
-
-// Per-light state of a march: on the stack for up to 16 lights (every scene of the tests and
-// benchmarks), on the heap beyond, so that every light lights every voxel.
-template <class T>
-class PerLight {
-public:
-    explicit PerLight(std::size_t n) : mData(mSmall.data()) {
-        if (n > mSmall.size()) {
-            mLarge.resize(n);
-            mData = mLarge.data();
-        } else {
-            std::fill_n(mData, n, T{});  // only the lights there are: a track is 520 bytes
-        }
-    }
-    PerLight(const PerLight&) = delete;
-    PerLight& operator=(const PerLight&) = delete;
-    T& operator[](std::size_t i) { return mData[i]; }
-    const T& operator[](std::size_t i) const { return mData[i]; }
-
-private:
-    std::array<T, 16> mSmall;
-    std::vector<T> mLarge;
-    T* mData;
-};
 
 struct SpanResult {
     Color radiance = Color::Zero();
     double transmittance = 1;
-};
-
-struct TexelRuntime {
-    std::unique_ptr<const MarchVolume> volume;
-    double tau = 1;
-    Material material;
-    /// The mesh/volume hybrid (docs/render.md, "Mesh where the volume is not faithful"): the
-    /// texel's source mesh, traced where a footprint asks for a level finer than `meshLevel`
-    /// (blended over the next level); no source, or the hybrid off: never.
-    std::shared_ptr<const ingest::TriangleMesh> sourceMesh;
-    std::unique_ptr<const detail::SourceBvh> source;
-    double meshLevel = std::numeric_limits<double>::infinity();
-    /// The mesh's share at continuous level `requested` (LevelChoice::requested).
-    double meshWeight(double requested) const {
-        return source ? std::clamp(requested - meshLevel, 0.0, 1.0) : 0.0;
-    }
 };
 
 struct PathState {
@@ -198,175 +158,8 @@ private:
                        double t, Counters& counters, int hintPrim = -1, const Vec3& hintR = Vec3::Zero()) const {
         return detail::shadePhong(mScene.lights, x, n, ng, view, m, Color::Ones(), scale,
                                   [&](const Vec3& origin, const Vec3& l, double distance) {
-                                      return shadowTransmittance(origin, l, distance, mConeSpread * t, hintPrim, hintR, counters);
+                                      return mShadows.shadowTransmittance(origin, l, distance, mConeSpread * t, hintPrim, hintR, counters);
                                   });
-    }
-
-    // Transmittance from o toward the light along the unit direction l, up to tMax: opaque
-    // faces and cell floors block, texel cells attenuate at the level of the cone `width`
-    // (world units, held constant along the shadow ray).
-    double shadowTransmittance(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim,
-                               const Vec3& hintR, Counters& counters) const {
-        if (const int slot = latticeSlot(l, tMax, hintPrim); slot >= 0)
-            return nearAndCachedShadow(slot, hintPrim, hintR, l, width, counters);
-        return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters);
-    }
-
-    // The slot of the transmittance lattice that answers a shadow query toward l (up to tMax)
-    // from inside primitive `prim` (−1: none): a directional light and a point inside a texel
-    // cell that has a lattice.
-    int latticeSlot(const Vec3& l, double tMax, int prim) const {
-        if (mOptions.shadowCacheResolution <= 0 || !std::isinf(tMax) || prim < 0) return -1;
-        const int slot = mLightCache.slot(l);  // −1 also when there is no lattice at all
-        return slot >= 0 && mLightCache.grid(prim).nw > 0 ? slot : -1;
-    }
-
-    // A query at cell coordinates r: the exact transmittance over the first kExactLatticeSteps
-    // lattice steps toward the light (marched in the cell's texel at the query's own level: the
-    // voxels next to the point, which a lit voxel's own column or leaf makes darker than the
-    // lattice nodes around it), times the lattice's value where that march ends. The march stops
-    // at the cell's sides, so that the lattice looked up is the right one. Two steps rather than
-    // one: on the forest PSNR 49.1 instead of 47.7 dB (sparse bush), 42.4 instead of 41.4 (dense
-    // bush, where the lattice blurs the terminator), for no measurable time.
-    //
-    // `span`, when the query comes from a camera march: the reference-space light direction and
-    // the local scale the march took at its span's middle, used instead of the query point's
-    // own (the mild-deformation assumption the march itself makes; it saves a Jacobian, its
-    // inverse and a cube root per query).
-    struct SpanFrame {
-        Vec3 light;  ///< unit, tiled reference space
-        double scale;  ///< the local scale at the span's middle
-    };
-    double nearAndCachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, double width,
-                               Counters& counters, const SpanFrame* span = nullptr) const {
-        ++counters.shadow;
-        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
-        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
-        const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
-        Vec3 lr;
-        if (span) {
-            lr = span->light;
-        } else {
-            Mat3 jt = prim.cell.jacobian(r);
-            jt.col(0) /= surface.repeatU;
-            jt.col(1) /= surface.repeatV;
-            lr = jt.inverse() * l;
-            const double len = lr.norm();
-            if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
-            lr /= len;
-        }
-        const Vec3 p0 = tile(r, surface);
-        double step = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
-        // Not past the cell's sides: the lattice looked up where the march ends is this cell's.
-        const double extent[2] = {surface.repeatU, surface.repeatV};
-        for (int a = 0; a < 2; ++a) {
-            if (lr[a] > 0) step = std::min(step, std::max(0.0, (extent[a] - p0[a]) / lr[a]));
-            else if (lr[a] < 0) step = std::min(step, std::max(0.0, -p0[a] / lr[a]));
-        }
-        bool floor = false;
-        if (p0.z() + step * lr.z() > 1) step = std::max(0.0, (1 - p0.z()) / lr.z());
-        if (p0.z() + step * lr.z() < 0) {
-            step = std::max(0.0, -p0.z() / lr.z());
-            floor = true;  // the step reaches the base surface, which blocks
-        }
-        const Vec3 p1 = p0 + step * lr;
-        const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim.cell, r, surface)));
-        const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tau, p0, p1, level, kTransmittanceCutoff);
-        counters.voxels += near.blocks;
-        if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
-        const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
-        return near.transmittance * cachedShadow(slot, primIndex, rEnd, l);
-    }
-
-    // The lattice's value at cell coordinates r of primitive `primIndex`. A node is one exact
-    // shadow ray from its point, at the level of the lattice's spacing; node rays are shared by
-    // all pixels, so they are not counted in any tile's statistics (which would then depend on
-    // which tile came first).
-    double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l) const {
-        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
-        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
-        const double spacing = 1.0 / double(mLightCache.grid(primIndex).nw);
-        return mLightCache.lookup(slot, primIndex, r, [&](const Vec3& node) {
-            // Nodes on the cell's faces move in by a hair, so that the ray starts inside.
-            const Vec3 rn = node.cwiseMax(Vec3::Constant(1e-4)).cwiseMin(Vec3::Constant(1 - 1e-4));
-            Counters uncounted;
-            return tracedShadow(prim.cell.map(rn), l, std::numeric_limits<double>::infinity(),
-                                localScale(prim.cell, rn, surface) * spacing, primIndex, rn, uncounted);
-        });
-    }
-
-    detail::LightTransmittanceCache makeLightCache() const {
-        const int n = std::min(mOptions.shadowCacheResolution, 256);
-        if (n <= 0) return {};
-        std::vector<Vec3> directions;
-        for (const Light& light : mScene.lights)
-            if (light.type == LightType::Directional &&
-                std::find(directions.begin(), directions.end(), Vec3(-light.direction)) == directions.end())
-                directions.push_back(-light.direction);
-        std::vector<detail::LightTransmittanceCache::Grid> grids(mTracer.prims().size());
-        // Node blocks are allocated as cells are first queried; the lattice is used only when
-        // all of them together would fit in kMaxLatticeNodes (a decision taken here, before any
-        // pixel, so that it does not depend on the order of the tiles), otherwise every query
-        // casts its ray. Beyond 4 tiles of the texel across a cell, the lattice gets coarser
-        // than 8 steps per tile.
-        constexpr double kMaxLatticeNodes = double(1 << 26);  // 256 MB of floats
-        double total = 0;
-        if (!directions.empty())
-            for (std::size_t i = 0; i < grids.size(); ++i) {
-                const Prim& prim = mTracer.prims()[i];
-                if (!prim.textured) continue;
-                const SurfaceRuntime& s = mSurfaces[std::size_t(prim.surface)];
-                const auto across = [&](double repeat) { return n * int(std::clamp(std::ceil(repeat), 1.0, 4.0)); };
-                grids[i] = {across(s.repeatU), across(s.repeatV), n};
-                total += double(grids[i].nodes()) * double(directions.size());
-            }
-        if (total > kMaxLatticeNodes) return {};
-        return detail::LightTransmittanceCache(std::move(directions), std::move(grids));
-    }
-
-    // The exact path: one ray toward the light.
-    double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
-                        Counters& counters) const {
-        ++counters.shadow;
-        return detail::walkShadowRay(
-            mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, kTransmittanceCutoff,
-            [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint,
-                double transmittance) {
-                const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
-                const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
-                const double localWidth = width / localScale(prim.cell, 0.5 * (rIn + rOut), surface);
-                // The hybrid's rule for shadows too: the source mesh where the footprint is finer
-                // than the volume is faithful, blended over the next level.
-                const double meshWeight =
-                    texel.meshWeight(chooseLevel(localWidth, mOptions.lodBias, texel.volume->maxLevel()).requested);
-                double result = 0;
-                if (meshWeight < 1) {
-                    const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tau, p0, p1,
-                                                                        shadowLevel(texel, localWidth),
-                                                                        kTransmittanceCutoff / transmittance);
-                    counters.voxels += seg.blocks;
-                    result = (1 - meshWeight) * seg.transmittance;
-                }
-                if (meshWeight > 0) {
-                    const double length = (p1 - p0).norm();
-                    const double sMin = startsAtHint ? (length > 0 ? kSelfIntersectionGap / length : 1.0) : 0.0;
-                    if (!texel.source->occluded(p0, p1, sMin)) result += meshWeight;
-                }
-                return result;
-            });
-    }
-
-    // A shadow march takes the single level nearest the cone's width (reference units): shadows
-    // are not blended.
-    int shadowLevel(const TexelRuntime& texel, double width) const {
-        const LevelChoice choice = chooseLevel(width, mOptions.lodBias, texel.volume->maxLevel());
-        return choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
-    }
-
-    static Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
-
-    static double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
-        return detail::localScale(cell, r, s.repeatU, s.repeatV);
     }
 
     void marchSpan(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, double tIn,
@@ -462,7 +255,7 @@ private:
             lightAt(mScene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
             sl.usable = referenceLight(sl.lw, sl.lr);
             if (sl.usable && mOptions.shading == ShadingMode::Fast) sl.kernel.emplace(sl.lr, view, m.shininess);
-            if (sl.usable) sl.latticeSlot = latticeSlot(sl.lw, INFINITY, primIndex);
+            if (sl.usable) sl.latticeSlot = mShadows.latticeSlot(sl.lw, INFINITY, primIndex);
         }
         const double shadowRefresh = std::clamp(mOptions.shadowRefresh, 1e-6, 1.0);
         const double reuseWeight = std::max(mOptions.reflectanceReuseWeight, 0.0);
@@ -537,10 +330,10 @@ private:
                                 const double width = kShadowConeScale * mConeSpread * (tIn + (tOut - tIn) * (sm / length));
                                 const Vec3 rc = cellPoint();
                                 if (sl.latticeSlot >= 0) {
-                                    const SpanFrame frame{sl.lr, scale};
-                                    shadowT[i] = nearAndCachedShadow(sl.latticeSlot, primIndex, rc, lw, width, counters, &frame);
+                                    const ShadowQueries::SpanFrame frame{sl.lr, scale};
+                                    shadowT[i] = mShadows.nearAndCachedShadow(sl.latticeSlot, primIndex, rc, lw, width, counters, &frame);
                                 } else {
-                                    shadowT[i] = shadowTransmittance(worldPoint(), lw, distance, width, primIndex, rc, counters);
+                                    shadowT[i] = mShadows.shadowTransmittance(worldPoint(), lw, distance, width, primIndex, rc, counters);
                                 }
                                 if (record && track.count < kTrackCapacity) {
                                     track.s[std::size_t(track.count)] = sm;
@@ -626,7 +419,7 @@ private:
         const double t = tIn + hit->s * (tOut - tIn);
         const Color radiance = detail::shadePhong(
             mScene.lights, x, n, n, -d, texel.material, hit->albedo, scale, [&](const Vec3& origin, const Vec3& l, double distance) {
-                return tracedShadow(origin, l, distance, mConeSpread * t, primIndex, rc, counters);
+                return mShadows.tracedShadow(origin, l, distance, mConeSpread * t, primIndex, rc, counters);
             });
         return {radiance, 0.0};
     }
@@ -637,25 +430,8 @@ private:
     const std::vector<SurfaceRuntime>& mSurfaces;
     const std::vector<TexelRuntime>& mTexels;
     double mConeSpread;
-    detail::LightTransmittanceCache mLightCache = makeLightCache();
+    ShadowQueries mShadows{mScene, mOptions, mTracer, mSurfaces, mTexels};
 };
-
-// The finest level at which the volume lets through what the source mesh does, within
-// `tolerance` (absolute transmittance, mean over random chords of the whole texel): from the
-// level of least error, finer levels as long as each stays within the tolerance. Finer than
-// that, a voxel stands for a piece of one opaque surface that the exponential medium lets
-// light through (and shadows itself), and the hybrid traces the mesh instead.
-double faithfulLevel(const octree::Octree& tree, const detail::SourceBvh& source, double tau, double tolerance) {
-    const auto chords = octree::measureChordTransmittance(
-        tree, [&](const Vec3& a, const Vec3& b) { return !source.occluded(a, b, 0); }, tau);
-    if (chords.empty()) return std::numeric_limits<double>::infinity();
-    std::size_t best = 0;
-    for (std::size_t l = 1; l < chords.size(); ++l)
-        if (std::abs(chords[l].error()) < std::abs(chords[best].error())) best = l;
-    std::size_t level = best;
-    while (level + 1 < chords.size() && std::abs(chords[level + 1].error()) <= tolerance) ++level;
-    return double(level);
-}
 
 }  // namespace
 
@@ -667,24 +443,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
 
     const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene);
     // Texels referenced by some surface (the others are not loaded).
-    std::vector<TexelRuntime> texels(scene.texels.size());
-    for (const SurfaceDef& s : scene.surfaces) {
-        if (!s.texel) continue;
-        TexelRuntime& t = texels[*s.texel];
-        if (t.volume) continue;
-        const TexelDef& def = scene.texels[*s.texel];
-        auto tree = def.octree ? def.octree : std::make_shared<const octree::Octree>(octree::readVto(def.volume));
-        if (tree->levels.empty() || tree->levels[0].empty())
-            throw InputError(def.volume, "octree has no root");
-        t.tau = def.tau;
-        t.material = def.material;
-        if (options.hybrid && (def.sourceData || !def.source.empty())) {
-            t.sourceMesh = def.sourceData ? def.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source));
-            t.source = std::make_unique<const detail::SourceBvh>(*t.sourceMesh, tree->info.source);
-            t.meshLevel = faithfulLevel(*tree, *t.source, def.tau, options.hybridTolerance);
-        }
-        t.volume = std::make_unique<const MarchVolume>(std::move(tree));
-    }
+    const std::vector<TexelRuntime> texels = detail::loadTexels(scene, options);
 
     const detail::CameraRays camera(scene.camera, width, height);
     const double coneSpread = detail::coneSpread(scene.camera.fovY, height, strata);

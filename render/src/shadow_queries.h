@@ -1,0 +1,208 @@
+// How the texel renderer answers "how much light reaches this point from that light"
+// (docs/render.md, "Shadows"): an exact shadow ray walked through the cells (volume marches, or
+// the source mesh where the hybrid takes it), or for directional lights the short exact march
+// and the per-cell transmittance lattice. One object per render, shared by all threads.
+#pragma once
+
+#include <vtex/render/renderer.h>
+#include <vtex/render/scene.h>
+#include <vtex/render/texel_march.h>
+
+#include "frame.h"
+#include "light_cache.h"
+#include "texel_runtime.h"
+#include "tracer.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace vtex::render::detail {
+
+inline constexpr double kTransmittanceCutoff = 1e-4;
+// Lattice steps marched exactly from a shadow query before the lattice is looked up.
+inline constexpr double kExactLatticeSteps = 2.0;
+// Shadow rays from a source-mesh hit skip this much reference space where they leave it (the
+// reference renderer's gap, reference.cpp).
+inline constexpr double kSelfIntersectionGap = 1e-5;
+
+class ShadowQueries {
+public:
+    ShadowQueries(const Scene& scene, const RenderOptions& options, const Tracer& tracer,
+                  const std::vector<SurfaceRuntime>& surfaces, const std::vector<TexelRuntime>& texels)
+        : mScene(scene), mOptions(options), mTracer(tracer), mSurfaces(surfaces), mTexels(texels) {}
+
+    // Transmittance from o toward the light along the unit direction l, up to tMax: opaque
+    // faces and cell floors block, texel cells attenuate at the level of the cone `width`
+    // (world units, held constant along the shadow ray).
+    double shadowTransmittance(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim,
+                               const Vec3& hintR, Counters& counters) const {
+        if (const int slot = latticeSlot(l, tMax, hintPrim); slot >= 0)
+            return nearAndCachedShadow(slot, hintPrim, hintR, l, width, counters);
+        return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters);
+    }
+
+    // The slot of the transmittance lattice that answers a shadow query toward l (up to tMax)
+    // from inside primitive `prim` (−1: none): a directional light and a point inside a texel
+    // cell that has a lattice.
+    int latticeSlot(const Vec3& l, double tMax, int prim) const {
+        if (mOptions.shadowCacheResolution <= 0 || !std::isinf(tMax) || prim < 0) return -1;
+        const int slot = mLightCache.slot(l);  // −1 also when there is no lattice at all
+        return slot >= 0 && mLightCache.grid(prim).nw > 0 ? slot : -1;
+    }
+
+    // A query at cell coordinates r: the exact transmittance over the first kExactLatticeSteps
+    // lattice steps toward the light (marched in the cell's texel at the query's own level: the
+    // voxels next to the point, which a lit voxel's own column or leaf makes darker than the
+    // lattice nodes around it), times the lattice's value where that march ends. The march stops
+    // at the cell's sides, so that the lattice looked up is the right one. Two steps rather than
+    // one: on the forest PSNR 49.1 instead of 47.7 dB (sparse bush), 42.4 instead of 41.4 (dense
+    // bush, where the lattice blurs the terminator), for no measurable time.
+    //
+    // `span`, when the query comes from a camera march: the reference-space light direction and
+    // the local scale the march took at its span's middle, used instead of the query point's
+    // own (the mild-deformation assumption the march itself makes; it saves a Jacobian, its
+    // inverse and a cube root per query).
+    struct SpanFrame {
+        Vec3 light;  ///< unit, tiled reference space
+        double scale;  ///< the local scale at the span's middle
+    };
+    double nearAndCachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, double width,
+                               Counters& counters, const SpanFrame* span = nullptr) const {
+        ++counters.shadow;
+        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
+        const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
+        Vec3 lr;
+        if (span) {
+            lr = span->light;
+        } else {
+            Mat3 jt = prim.cell.jacobian(r);
+            jt.col(0) /= surface.repeatU;
+            jt.col(1) /= surface.repeatV;
+            lr = jt.inverse() * l;
+            const double len = lr.norm();
+            if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
+            lr /= len;
+        }
+        const Vec3 p0 = tile(r, surface);
+        double step = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
+        // Not past the cell's sides: the lattice looked up where the march ends is this cell's.
+        const double extent[2] = {surface.repeatU, surface.repeatV};
+        for (int a = 0; a < 2; ++a) {
+            if (lr[a] > 0) step = std::min(step, std::max(0.0, (extent[a] - p0[a]) / lr[a]));
+            else if (lr[a] < 0) step = std::min(step, std::max(0.0, -p0[a] / lr[a]));
+        }
+        bool floor = false;
+        if (p0.z() + step * lr.z() > 1) step = std::max(0.0, (1 - p0.z()) / lr.z());
+        if (p0.z() + step * lr.z() < 0) {
+            step = std::max(0.0, -p0.z() / lr.z());
+            floor = true;  // the step reaches the base surface, which blocks
+        }
+        const Vec3 p1 = p0 + step * lr;
+        const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim.cell, r, surface)));
+        const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tau, p0, p1, level, kTransmittanceCutoff);
+        counters.voxels += near.blocks;
+        if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
+        const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
+        return near.transmittance * cachedShadow(slot, primIndex, rEnd, l);
+    }
+
+    // The lattice's value at cell coordinates r of primitive `primIndex`. A node is one exact
+    // shadow ray from its point, at the level of the lattice's spacing; node rays are shared by
+    // all pixels, so they are not counted in any tile's statistics (which would then depend on
+    // which tile came first).
+    double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l) const {
+        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
+        const double spacing = 1.0 / double(mLightCache.grid(primIndex).nw);
+        return mLightCache.lookup(slot, primIndex, r, [&](const Vec3& node) {
+            // Nodes on the cell's faces move in by a hair, so that the ray starts inside.
+            const Vec3 rn = node.cwiseMax(Vec3::Constant(1e-4)).cwiseMin(Vec3::Constant(1 - 1e-4));
+            Counters uncounted;
+            return tracedShadow(prim.cell.map(rn), l, std::numeric_limits<double>::infinity(),
+                                localScale(prim.cell, rn, surface) * spacing, primIndex, rn, uncounted);
+        });
+    }
+
+    // The exact path: one ray toward the light.
+    double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
+                        Counters& counters) const {
+        ++counters.shadow;
+        return walkShadowRay(
+            mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, kTransmittanceCutoff,
+            [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint,
+                double transmittance) {
+                const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
+                const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
+                const double localWidth = width / localScale(prim.cell, 0.5 * (rIn + rOut), surface);
+                // The hybrid's rule for shadows too: the source mesh where the footprint is finer
+                // than the volume is faithful, blended over the next level.
+                const double meshWeight =
+                    texel.meshWeight(chooseLevel(localWidth, mOptions.lodBias, texel.volume->maxLevel()).requested);
+                double result = 0;
+                if (meshWeight < 1) {
+                    const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tau, p0, p1,
+                                                                        shadowLevel(texel, localWidth),
+                                                                        kTransmittanceCutoff / transmittance);
+                    counters.voxels += seg.blocks;
+                    result = (1 - meshWeight) * seg.transmittance;
+                }
+                if (meshWeight > 0) {
+                    const double length = (p1 - p0).norm();
+                    const double sMin = startsAtHint ? (length > 0 ? kSelfIntersectionGap / length : 1.0) : 0.0;
+                    if (!texel.source->occluded(p0, p1, sMin)) result += meshWeight;
+                }
+                return result;
+            });
+    }
+
+    // A shadow march takes the single level nearest the cone's width (reference units): shadows
+    // are not blended.
+    int shadowLevel(const TexelRuntime& texel, double width) const {
+        const LevelChoice choice = chooseLevel(width, mOptions.lodBias, texel.volume->maxLevel());
+        return choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
+    }
+
+private:
+    LightTransmittanceCache makeLightCache() const {
+        const int n = std::min(mOptions.shadowCacheResolution, 256);
+        if (n <= 0) return {};
+        std::vector<Vec3> directions;
+        for (const Light& light : mScene.lights)
+            if (light.type == LightType::Directional &&
+                std::find(directions.begin(), directions.end(), Vec3(-light.direction)) == directions.end())
+                directions.push_back(-light.direction);
+        std::vector<LightTransmittanceCache::Grid> grids(mTracer.prims().size());
+        // Node blocks are allocated as cells are first queried; the lattice is used only when
+        // all of them together would fit in kMaxLatticeNodes (a decision taken here, before any
+        // pixel, so that it does not depend on the order of the tiles), otherwise every query
+        // casts its ray. Beyond 4 tiles of the texel across a cell, the lattice gets coarser
+        // than 8 steps per tile.
+        constexpr double kMaxLatticeNodes = double(1 << 26);  // 256 MB of floats
+        double total = 0;
+        if (!directions.empty())
+            for (std::size_t i = 0; i < grids.size(); ++i) {
+                const Prim& prim = mTracer.prims()[i];
+                if (!prim.textured) continue;
+                const SurfaceRuntime& s = mSurfaces[std::size_t(prim.surface)];
+                const auto across = [&](double repeat) { return n * int(std::clamp(std::ceil(repeat), 1.0, 4.0)); };
+                grids[i] = {across(s.repeatU), across(s.repeatV), n};
+                total += double(grids[i].nodes()) * double(directions.size());
+            }
+        if (total > kMaxLatticeNodes) return {};
+        return LightTransmittanceCache(std::move(directions), std::move(grids));
+    }
+
+    const Scene& mScene;
+    const RenderOptions& mOptions;
+    const Tracer& mTracer;
+    const std::vector<SurfaceRuntime>& mSurfaces;
+    const std::vector<TexelRuntime>& mTexels;
+    LightTransmittanceCache mLightCache = makeLightCache();
+};
+
+}  // namespace vtex::render::detail

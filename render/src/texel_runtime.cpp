@@ -1,0 +1,60 @@
+// See texel_runtime.h.
+#include "texel_runtime.h"
+
+#include <vtex/core/error.h>
+#include <vtex/ingest/ingest.h>
+#include <vtex/octree/chord_transmittance.h>
+
+#include "footprint.h"
+
+#include <cmath>
+
+namespace vtex::render::detail {
+namespace {
+
+// The finest level at which the volume lets through what the source mesh does, within
+// `tolerance` (absolute transmittance, mean over random chords of the whole texel): from the
+// level of least error, finer levels as long as each stays within the tolerance. Finer than
+// that, a voxel stands for a piece of one opaque surface that the exponential medium lets
+// light through (and shadows itself), and the hybrid traces the mesh instead.
+double faithfulLevel(const octree::Octree& tree, const detail::SourceBvh& source, double tau, double tolerance) {
+    const auto chords = octree::measureChordTransmittance(
+        tree, [&](const Vec3& a, const Vec3& b) { return !source.occluded(a, b, 0); }, tau);
+    if (chords.empty()) return std::numeric_limits<double>::infinity();
+    std::size_t best = 0;
+    for (std::size_t l = 1; l < chords.size(); ++l)
+        if (std::abs(chords[l].error()) < std::abs(chords[best].error())) best = l;
+    std::size_t level = best;
+    while (level + 1 < chords.size() && std::abs(chords[level + 1].error()) <= tolerance) ++level;
+    return double(level);
+}
+
+}  // namespace
+
+std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options) {
+    std::vector<TexelRuntime> texels(scene.texels.size());
+    for (const SurfaceDef& s : scene.surfaces) {
+        if (!s.texel) continue;
+        TexelRuntime& t = texels[*s.texel];
+        if (t.volume) continue;
+        const TexelDef& def = scene.texels[*s.texel];
+        auto tree = def.octree ? def.octree : std::make_shared<const octree::Octree>(octree::readVto(def.volume));
+        if (tree->levels.empty() || tree->levels[0].empty())
+            throw InputError(def.volume, "octree has no root");
+        t.tau = def.tau;
+        t.material = def.material;
+        if (options.hybrid && (def.sourceData || !def.source.empty())) {
+            t.sourceMesh = def.sourceData ? def.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source));
+            t.source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
+            t.meshLevel = faithfulLevel(*tree, *t.source, def.tau, options.hybridTolerance);
+        }
+        t.volume = std::make_unique<const MarchVolume>(std::move(tree));
+    }
+    return texels;
+}
+
+double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
+    return detail::localScale(cell, r, s.repeatU, s.repeatV);
+}
+
+}  // namespace vtex::render::detail

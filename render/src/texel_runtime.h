@@ -1,0 +1,46 @@
+// What the texel renderer keeps of each texel a scene uses: the volume prepared for marching,
+// its material and, for the mesh/volume hybrid, its source mesh and the level past which that
+// mesh is traced (docs/render.md, "Mesh where the volume is not faithful").
+#pragma once
+
+#include <vtex/render/renderer.h>
+#include <vtex/render/scene.h>
+#include <vtex/render/texel_march.h>
+
+#include "frame.h"
+#include "source_bvh.h"
+
+#include <algorithm>
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace vtex::render::detail {
+
+struct TexelRuntime {
+    std::unique_ptr<const MarchVolume> volume;
+    double tau = 1;
+    Material material;
+    /// The mesh/volume hybrid (docs/render.md, "Mesh where the volume is not faithful"): the
+    /// texel's source mesh, traced where a footprint asks for a level finer than `meshLevel`
+    /// (blended over the next level); no source, or the hybrid off: never.
+    std::shared_ptr<const ingest::TriangleMesh> sourceMesh;
+    std::unique_ptr<const detail::SourceBvh> source;
+    double meshLevel = std::numeric_limits<double>::infinity();
+    /// The mesh's share at continuous level `requested` (LevelChoice::requested).
+    double meshWeight(double requested) const {
+        return source ? std::clamp(requested - meshLevel, 0.0, 1.0) : 0.0;
+    }
+};
+
+/// One entry per scene texel; those that no surface uses stay empty (not loaded). Throws
+/// vtex::InputError naming a volume without a root, or a source that cannot be read.
+std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options);
+
+/// Tiled reference coordinates of cell coordinates r on surface s (x and y times its repeat).
+inline Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
+
+/// World length per unit of tiled reference space around cell coordinates r (footprint.h).
+double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s);
+
+}  // namespace vtex::render::detail
