@@ -17,6 +17,7 @@ struct RenderArgs : ImageCommandArgs {
     std::string shading = "fast";
     double shadowRefresh = 1;
     std::string hybrid = "on";
+    bool exact = false;
 };
 
 const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
@@ -35,6 +36,9 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
                    "query's (1, the default: a query at every voxel; below 1 faster, deeper voxels too bright)")
         ->check(CLI::Range(0.001, 1.0))
         ->capture_default_str();
+    app.add_flag("--exact", a->exact,
+                 "Turn every approximation off (shadow reuse, lattice, blend cut-off, reflectance reuse): "
+                 "the render they are measured against");
     app.add_option("--hybrid", a->hybrid,
                    "Trace a texel's source mesh where the footprint is finer than its volume is faithful "
                    "(on, the default, for texels with a source) or always march the volume (off)")
@@ -53,7 +57,8 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         options.threads = a->threads;
         options.shading = a->shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
         options.aovs = a->aovs;
-        options.shadowRefresh = a->shadowRefresh;
+        if (a->exact) options.approximations = render::ApproximationBudget::exact();
+        else options.approximations.shadowRefresh = a->shadowRefresh;
         options.hybrid = a->hybrid == "on";
         TerminalProgress progress(global);
         const render::RenderResult result = render::renderScene(scene, options, progress);

@@ -13,11 +13,12 @@ namespace vtex::render::detail {
 template <class T>
 class PerLight {
 public:
-    explicit PerLight(std::size_t n) : mData(mSmall.data()) {
+    explicit PerLight(std::size_t n) {
         if (n > mSmall.size()) {
             mLarge.resize(n);
             mData = mLarge.data();
         } else {
+            mData = mSmall.data();
             std::fill_n(mData, n, T{});  // only the lights there are: a track is 520 bytes
         }
     }
@@ -29,7 +30,7 @@ public:
 private:
     std::array<T, 16> mSmall;
     std::vector<T> mLarge;
-    T* mData;
+    T* mData = nullptr;
 };
 
 }  // namespace vtex::render::detail

@@ -29,8 +29,31 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
+#include <sstream>
 
 namespace vtex::render {
+
+ApproximationBudget ApproximationBudget::exact() {
+    ApproximationBudget b;
+    b.shareShadowRays = false;
+    b.shadowCacheResolution = 0;
+    b.blendCutoff = 0;
+    b.reflectanceReuseWeight = 0;
+    b.exactFloorShadowAbove = 0;
+    b.shadowRefresh = 1;
+    return b;
+}
+
+bool ApproximationBudget::isExact() const { return *this == exact(); }
+
+std::string ApproximationBudget::key() const {
+    std::ostringstream k;
+    k.precision(17);
+    k << "share_shadow_rays " << shareShadowRays << " shadow_cache_resolution " << shadowCacheResolution << " blend_cutoff "
+      << blendCutoff << " reflectance_reuse_weight " << reflectanceReuseWeight << " exact_floor_shadow_above "
+      << exactFloorShadowAbove << " shadow_refresh " << shadowRefresh;
+    return k.str();
+}
 
 double RenderStats::meanLevel() const {
     double sum = 0, weight = 0;
@@ -148,7 +171,7 @@ private:
         const double scale = std::min(surface.height, patchSize(prim));
         // The hint, just above the floor where the lattice's near march starts inside the cell,
         // is what lets a query use the lattice.
-        const int hintPrim = seenThrough < mOptions.exactFloorShadowAbove ? int(&prim - mTracer.prims().data()) : -1;
+        const int hintPrim = seenThrough < mOptions.approximations.exactFloorShadowAbove ? int(&prim - mTracer.prims().data()) : -1;
         return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters, hintPrim, Vec3(r.x(), r.y(), 1e-4));
     }
 
@@ -177,17 +200,17 @@ private:
         const double tMid = 0.5 * (tIn + tOut);
         const int maxLevel = texel.volume->maxLevel();
         const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
-        // A blend weight below mOptions.blendCutoff goes to the other level, which is then the
+        // A blend weight below mOptions.approximations.blendCutoff goes to the other level, which is then the
         // only one marched: the image moves by at most that weight times the difference of the
         // two levels' results (bounded by the test SkippedBlendLevelsMatchTheFullBlend).
         double fineWeight = choice.fineWeight;
-        if (fineWeight > 0 && fineWeight < mOptions.blendCutoff) fineWeight = 0;
-        if (fineWeight > 1 - mOptions.blendCutoff) fineWeight = 1;
+        if (fineWeight > 0 && fineWeight < mOptions.approximations.blendCutoff) fineWeight = 0;
+        if (fineWeight > 1 - mOptions.approximations.blendCutoff) fineWeight = 1;
         // The same cut-off for the mesh's share: a share below it is not traced, above 1 − it the
         // volume is not marched.
         double meshWeight = texel.meshWeight(choice.requested);
-        if (meshWeight > 0 && meshWeight < mOptions.blendCutoff) meshWeight = 0;
-        if (meshWeight > 1 - mOptions.blendCutoff) meshWeight = 1;
+        if (meshWeight > 0 && meshWeight < mOptions.approximations.blendCutoff) meshWeight = 0;
+        if (meshWeight > 1 - mOptions.approximations.blendCutoff) meshWeight = 1;
         counters.mesh += meshWeight;
         if (meshWeight >= 1) {
             compositeSpan(traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid,
@@ -231,8 +254,8 @@ private:
             bool directional = false;
             bool usable = false;  ///< directional: lr is finite
             int latticeSlot = -1; ///< directional, usable, and the cell has a transmittance lattice
-            Vec3 lw, lr;
-            Color e;
+            Vec3 lw = Vec3::Zero(), lr = Vec3::Zero();
+            Color e = Color::Zero();
             std::optional<ReflectanceKernel> kernel;  ///< directional, usable, fast shading
         };
         PerLight<SpanLight> spanLights(lights);
@@ -257,8 +280,8 @@ private:
             if (sl.usable && mOptions.shading == ShadingMode::Fast) sl.kernel.emplace(sl.lr, view, m.shininess);
             if (sl.usable) sl.latticeSlot = mShadows.latticeSlot(sl.lw, INFINITY, primIndex);
         }
-        const double shadowRefresh = std::clamp(mOptions.shadowRefresh, 1e-6, 1.0);
-        const double reuseWeight = std::max(mOptions.reflectanceReuseWeight, 0.0);
+        const double shadowRefresh = std::clamp(mOptions.approximations.shadowRefresh, 1e-6, 1.0);
+        const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
         const auto run = [&](int level, bool record, double blendWeight) {
             SpanResult r;
             PerLight<octree::ReflectanceFactors> lastReflectance(lights);
@@ -370,7 +393,7 @@ private:
         if (fineWeight >= 1) {
             result = run(choice.fine, false, 1.0);
         } else {
-            result = run(choice.coarse, mOptions.shareShadowRays, 1 - fineWeight);
+            result = run(choice.coarse, mOptions.approximations.shareShadowRays, 1 - fineWeight);
             if (fineWeight > 0) {
                 const SpanResult fine = run(choice.fine, false, fineWeight);
                 const double w = fineWeight;
@@ -485,6 +508,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
     result.stats = detail::summarize(tileCounters, geometry, threads, width, height, strata * strata, wallSeconds, loadSeconds);
     for (const TexelRuntime& t : texels)
         if (t.volume) result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
+    result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
     result.image = std::move(image);
     result.warnings = scene.warnings;
     return result;
@@ -510,6 +534,7 @@ void writeStatsJson(const RenderStats& s, const std::filesystem::path& file) {
     if (s.renderer == "texel") {
         j["mesh_segments"] = s.meshSegments;
         j["mesh_levels"] = s.meshLevels;
+        j["approximations"] = s.approximations;
     }
     if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;
     writeFileAtomically(file, j.dump(2) + "\n");

@@ -49,7 +49,7 @@ public:
     // from inside primitive `prim` (−1: none): a directional light and a point inside a texel
     // cell that has a lattice.
     int latticeSlot(const Vec3& l, double tMax, int prim) const {
-        if (mOptions.shadowCacheResolution <= 0 || !std::isinf(tMax) || prim < 0) return -1;
+        if (mOptions.approximations.shadowCacheResolution <= 0 || !std::isinf(tMax) || prim < 0) return -1;
         const int slot = mLightCache.slot(l);  // −1 also when there is no lattice at all
         return slot >= 0 && mLightCache.grid(prim).nw > 0 ? slot : -1;
     }
@@ -169,7 +169,7 @@ public:
 
 private:
     LightTransmittanceCache makeLightCache() const {
-        const int n = std::min(mOptions.shadowCacheResolution, 256);
+        const int n = std::min(mOptions.approximations.shadowCacheResolution, 256);
         if (n <= 0) return {};
         std::vector<Vec3> directions;
         for (const Light& light : mScene.lights)

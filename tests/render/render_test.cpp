@@ -288,10 +288,10 @@ TEST(Render, SharedShadowRaysMatchPerLevelShadowRays) {
     Scene scene = grassPlane(64);
     scene.lights[0].direction = Eigen::Vector3d(-0.8, 0.3, -0.5).normalized();
     RenderOptions o;
-    o.shadowCacheResolution = 0;  // every query casts its ray (see CachedShadowsMatchShadowRays)
-    o.shareShadowRays = false;
+    o.approximations.shadowCacheResolution = 0;  // every query casts its ray (see CachedShadowsMatchShadowRays)
+    o.approximations.shareShadowRays = false;
     const RenderResult exact = renderQuiet(scene, o);
-    o.shareShadowRays = true;
+    o.approximations.shareShadowRays = true;
     const RenderResult shared = renderQuiet(scene, o);
     const Departure d = departure(shared.image, exact.image);
     std::cout << "shared shadow rays: relative RMSE " << d.pixel << " (8x8 blocks " << d.block << "), means "
@@ -320,10 +320,10 @@ TEST(Render, CachedShadowsMatchShadowRays) {
     Scene scene = grassPlane(64);
     scene.lights[0].direction = Eigen::Vector3d(-0.8, 0.3, -0.5).normalized();
     RenderOptions o;
-    o.shadowCacheResolution = 0;
+    o.approximations.shadowCacheResolution = 0;
     const RenderResult exact = renderQuiet(scene, o);
     for (const int n : {8, 16}) {
-        o.shadowCacheResolution = n;
+        o.approximations.shadowCacheResolution = n;
         const RenderResult cached = renderQuiet(scene, o);
         const Departure d = departure(cached.image, exact.image);
         std::cout << "cached shadows (" << n << " per cell): relative RMSE " << d.pixel << " (8x8 blocks " << d.block
@@ -346,9 +346,9 @@ TEST(Render, CachedShadowsMatchShadowRays) {
 TEST(Render, SkippedBlendLevelsMatchTheFullBlend) {
     const Scene scene = grassPlane(64);
     RenderOptions o;
-    o.blendCutoff = 0;
+    o.approximations.blendCutoff = 0;
     const RenderResult exact = renderQuiet(scene, o);
-    o.blendCutoff = 0.1;
+    o.approximations.blendCutoff = 0.1;
     const RenderResult skipped = renderQuiet(scene, o);
     const Departure d = departure(skipped.image, exact.image);
     std::cout << "skipped blend levels: relative RMSE " << d.pixel << " (8x8 blocks " << d.block << "), means "
@@ -380,13 +380,13 @@ TEST(Render, ReusedReflectanceStaysWithinItsBound) {
         }
     scene.texels[0].octree = std::make_shared<const vtex::octree::Octree>(std::move(tree));
     RenderOptions o;
-    o.reflectanceReuseWeight = 0;
+    o.approximations.reflectanceReuseWeight = 0;
     const RenderResult exact = renderQuiet(scene, o);
     const RenderResult reused = renderQuiet(scene, {});
     float albedo = 0;
     for (const auto& level : scene.texels[0].octree->levels)
         for (const auto& node : level) albedo = std::max({albedo, node.data.albedo[0], node.data.albedo[1], node.data.albedo[2]});
-    const double bound = 10 * RenderOptions{}.reflectanceReuseWeight *
+    const double bound = 10 * ApproximationBudget{}.reflectanceReuseWeight *
                          largestPhongRadiance(scene.lights[0].color.maxCoeff(), scene.texels[0].material, albedo);
     const double worst = maxAbsDifference(exact.image, reused.image);
     std::cout << "reflectance reuse: worst pixel " << worst << " (bound " << bound << "), RMSE "
@@ -404,10 +404,10 @@ TEST(Render, DimFloorsTakeLatticeShadowsWithinTheirBound) {
     Scene scene = grassPlane(64);
     scene.texels[0].tau = 4;  // dense columns: many floor points are seen through little
     RenderOptions o;
-    o.exactFloorShadowAbove = 0;
+    o.approximations.exactFloorShadowAbove = 0;
     const RenderResult exact = renderQuiet(scene, o);
     const RenderResult dim = renderQuiet(scene, {});
-    const double bound = RenderOptions{}.exactFloorShadowAbove *
+    const double bound = ApproximationBudget{}.exactFloorShadowAbove *
                          largestPhongRadiance(scene.lights[0].color.maxCoeff(), scene.surfaces[0].material, 1.0);
     const double worst = maxAbsDifference(exact.image, dim.image);
     std::cout << "dim floors through the lattice: worst pixel " << worst << " (bound " << bound << "), RMSE "
@@ -424,11 +424,11 @@ TEST(Render, SoonerShadowRefreshApproachesAQueryPerVoxel) {
     Scene scene = grassPlane(48);
     scene.lights[0].direction = Eigen::Vector3d(-0.7, 0.3, -0.6).normalized();
     RenderOptions o;
-    o.shadowRefresh = 1.0;
+    o.approximations.shadowRefresh = 1.0;
     const RenderResult perVoxel = renderQuiet(scene, o);
-    o.shadowRefresh = 0.7;
+    o.approximations.shadowRefresh = 0.7;
     const RenderResult sooner = renderQuiet(scene, o);
-    o.shadowRefresh = 0.25;
+    o.approximations.shadowRefresh = 0.25;
     const RenderResult usual = renderQuiet(scene, o);
     EXPECT_EQ(perVoxel.image.rgba, renderQuiet(scene, {}).image.rgba) << "a query per voxel is the default";
     const double soonerError = rmse(sooner.image, perVoxel.image), usualError = rmse(usual.image, perVoxel.image);

@@ -65,6 +65,8 @@ struct RenderStep {
     /// The texel renderer's mesh/volume hybrid (render::RenderOptions::hybrid) for texels with
     /// a source: the pipeline binds each built texel's source mesh.
     bool hybrid = true;
+    /// "default" or "exact" (render::ApproximationBudget::exact(): every approximation off).
+    std::string approximations = "default";
     /// texel (`vtex render`) | reference (`vtex reference`: the texels' source meshes instead of
     /// their volumes; lod_bias and shading do not apply)
     std::string renderer = "texel";

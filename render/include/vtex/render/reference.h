@@ -26,12 +26,10 @@ enum class ReferenceMode {
     Deformed
 };
 
-struct ReferenceOptions {
-    int width = 0;   ///< 0: the scene's camera.width
-    int height = 0;  ///< 0: the scene's camera.height
-    int spp = 16;    ///< jittered samples per pixel (a √spp × √spp grid, rounded up)
-    int threads = 0; ///< 0: all hardware threads
-    bool aovs = false;  ///< fill Image::depth (Image::level stays −1)
+/// ImageOptions with 16 jittered samples per pixel by default; aovs fill Image::depth only
+/// (Image::level stays −1).
+struct ReferenceOptions : ImageOptions {
+    ReferenceOptions() { spp = 16; }
     ReferenceMode mode = ReferenceMode::Embedded;
     /// Deformed: the largest distance between a subdivided triangle and the true deformed
     /// surface, as a fraction of the cell's size.

@@ -30,15 +30,19 @@ enum class ShadingMode {
     Fast
 };
 
-struct RenderOptions {
+/// What both renderers take: the image and how its pixels are sampled.
+struct ImageOptions {
     int width = 0;        ///< 0: the scene's camera.width
     int height = 0;       ///< 0: the scene's camera.height
-    int spp = 1;          ///< samples per pixel (a √spp × √spp stratified grid, rounded up)
-    double lodBias = 0;   ///< added to the level choice: +1 is one octree level coarser
+    int spp = 1;          ///< samples per pixel (a √spp × √spp grid, rounded up)
     int threads = 0;      ///< 0: all hardware threads
-    ShadingMode shading = ShadingMode::Fast;
-    bool aovs = false;    ///< fill Image::depth and Image::level
-    int referenceSamples = 24;  ///< samplesPerAxis of the reference reflectance
+    bool aovs = false;    ///< fill Image::depth (and, texel renders, Image::level)
+};
+
+/// Every approximation of the texel renderer that trades error for time, in one place, each
+/// with its bound stated and tested (docs/render.md). exact() turns them all off: the render
+/// they are measured against. key() is what a pipeline's cache key and stats.json record.
+struct ApproximationBudget {
     /// The second level of a blend reuses the first level's shadow rays (docs/render.md); false:
     /// each level casts its own (slower; the exact path the approximation is tested against).
     bool shareShadowRays = true;
@@ -68,6 +72,20 @@ struct RenderOptions {
     /// deeper voxels reuse shallower voxels' shadows and are too bright: on the bush field 0.25
     /// raised the image mean by 14–32 % (docs/render.md, "Shadows").
     double shadowRefresh = 1;
+
+    /// Every approximation off.
+    static ApproximationBudget exact();
+    bool isExact() const;
+    /// One line naming every value, for cache keys and stats.json.
+    std::string key() const;
+    friend bool operator==(const ApproximationBudget&, const ApproximationBudget&) = default;
+};
+
+struct RenderOptions : ImageOptions {
+    double lodBias = 0;   ///< added to the level choice: +1 is one octree level coarser
+    ShadingMode shading = ShadingMode::Fast;
+    int referenceSamples = 24;  ///< samplesPerAxis of the reference reflectance
+    ApproximationBudget approximations;
     /// The mesh/volume hybrid (docs/render.md, "Mesh where the volume is not faithful"): a texel
     /// with a `source` mesh is traced as that mesh where a footprint asks for a level finer than
     /// the finest level whose chord transmittance is within `hybridTolerance` of the mesh's
@@ -97,6 +115,8 @@ struct RenderStats {
     /// summed), and per texel the level past which its mesh takes over (−1: no mesh).
     double meshSegments = 0;
     std::vector<double> meshLevels;
+    /// Texel renders: "exact", or ApproximationBudget::key() of the budget used.
+    std::string approximations;
     /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:
     /// the deformed copies).
     std::uint64_t referenceTriangles = 0;
