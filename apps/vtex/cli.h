@@ -39,10 +39,17 @@ using CommandFactory = std::function<Action(CLI::App& app)>;
 /// sorts the subcommands in `vtex --help` by pipeline stage.
 bool registerCommand(int order, CommandFactory factory);
 
+/// What `vtex inspect` was asked for: JSON instead of a summary; for an octree, the source mesh
+/// to measure each level's chord transmittance against.
+struct InspectOptions {
+    bool json = false;
+    std::filesystem::path source;
+};
+
 /// How `vtex inspect` summarises one kind of file; registered per file extension (".glb",
-/// ".vtl", ...) from a cmd_inspect_<kind>.cpp. Writes a human summary, or JSON when `json`,
-/// to `out`; throws vtex::InputError for a file it cannot read.
-using Inspector = std::function<void(const std::filesystem::path& file, bool json, std::ostream& out)>;
+/// ".vtl", ...) from a cmd_inspect_<kind>.cpp. Writes a human summary, or JSON when asked, to
+/// `out`; throws vtex::InputError for a file it cannot read.
+using Inspector = std::function<void(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out)>;
 bool registerInspector(const std::string& extension, Inspector inspector);
 const Inspector* findInspector(const std::string& extension);
 

@@ -1,4 +1,4 @@
-// `vtex inspect FILE [--json]`: what a .glb, .vtl or .vto holds. Each kind of file has its
+// `vtex inspect FILE [--json] [--source MESH]`: what a .glb, .vtl or .vto holds. Each kind of file has its
 // inspector in a cmd_inspect_<kind>.cpp; this file only dispatches on the extension.
 #include "cli.h"
 
@@ -14,10 +14,13 @@ const bool registered = registerCommand(50, [](CLI::App& app) -> Action {
     app.name("inspect");
     app.description("Summarise a mesh (.glb), sampled volume (.vtl) or octree (.vto)");
     auto file = std::make_shared<std::string>();
-    auto json = std::make_shared<bool>(false);
+    auto options = std::make_shared<InspectOptions>();
     app.add_option("FILE", *file, "The file to summarise")->required();
-    app.add_flag("--json", *json, "Print JSON on stdout instead of a summary");
-    return [file, json](const GlobalOptions&) {
+    app.add_flag("--json", options->json, "Print JSON on stdout instead of a summary");
+    app.add_option("--source", options->source,
+                   "Octrees: the source mesh, to measure each level's transmittance along random chords against "
+                   "the fraction of them that miss it");
+    return [file, options](const GlobalOptions&) {
         const std::filesystem::path path(*file);
         std::string extension = path.extension().string();
         std::transform(extension.begin(), extension.end(), extension.begin(),
@@ -25,7 +28,9 @@ const bool registered = registerCommand(50, [](CLI::App& app) -> Action {
         const Inspector* inspector = findInspector(extension);
         if (!inspector) throw InputError(path, "unknown file kind '" + extension + "'");
         if (!std::filesystem::is_regular_file(path)) throw InputError(path, "no such file");
-        (*inspector)(path, *json, std::cout);
+        if (!options->source.empty() && extension != ".vto")
+            throw CLI::ValidationError("--source", "only for an octree (.vto)");
+        (*inspector)(path, *options, std::cout);
     };
 });
 

@@ -12,7 +12,8 @@
 namespace vtex::cli {
 namespace {
 
-void inspectGltf(const std::filesystem::path& file, bool json, std::ostream& out) {
+void inspectGltf(const std::filesystem::path& file, const InspectOptions& inspect, std::ostream& out) {
+    const bool json = inspect.json;
     ingest::IngestOptions options;
     options.orientClosed = true;
     ingest::IngestReport report;

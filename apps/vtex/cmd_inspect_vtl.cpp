@@ -18,7 +18,8 @@ namespace {
 // JSON has no NaN or infinity.
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-void inspectVtl(const std::filesystem::path& file, bool json, std::ostream& out) {
+void inspectVtl(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out) {
+    const bool json = options.json;
     const std::string bytes = octree::readFileBytes(file);
     const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTL", 8), octree::kVtlVersion);
     if (!check.problem.empty()) {

@@ -1,13 +1,18 @@
-// `vtex inspect texel.vto [--json]`: what an octree holds, level by level.
+// `vtex inspect texel.vto [--json] [--source mesh.glb]`: what an octree holds, level by level, and
+// with its source what each level lets through against the mesh.
 #include "cli.h"
 #include "inspect_checksums.h"
 
 #include <vtex/core/error.h>
+#include <vtex/ingest/ingest.h>
+#include <vtex/octree/chord_transmittance.h>
 #include <vtex/octree/octree.h>
+#include <vtex/render/source_visibility.h>
 
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -17,7 +22,18 @@ namespace {
 // JSON has no NaN or infinity.
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-void inspectVto(const std::filesystem::path& file, bool json, std::ostream& out) {
+// Per level, the chord transmittance against the source mesh (octree/chord_transmittance.h);
+// empty without a source.
+std::vector<octree::ChordTransmittance> chordsAgainstSource(const octree::Octree& tree, const std::filesystem::path& source) {
+    if (source.empty()) return {};
+    const ingest::TriangleMesh mesh = ingest::loadMesh(source);
+    const render::SourceVisibility visibility(mesh, tree.info.source);
+    return octree::measureChordTransmittance(
+        tree, [&](const octree::Vec3& a, const octree::Vec3& b) { return visibility.visible(a, b); });
+}
+
+void inspectVto(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out) {
+    const bool json = options.json;
     const std::string bytes = octree::readFileBytes(file);
     const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTO", 8), octree::kVtoVersion);
     if (!check.problem.empty()) {
@@ -26,11 +42,18 @@ void inspectVto(const std::filesystem::path& file, bool json, std::ostream& out)
     }
     const octree::Octree tree = octree::parseVto(bytes, file);  // throws on any problem
     const auto& info = tree.info;
+    const auto chords = chordsAgainstSource(tree, options.source);
     if (json) {
         nlohmann::json levels = nlohmann::json::array();
         for (std::uint32_t l = 0; l < tree.levelCount(); ++l) {
             const auto& s = tree.stats[l];
+            nlohmann::json chord = nullptr;
+            if (!chords.empty())
+                chord = {{"visibility", number(chords[l].visibility)},
+                         {"transmittance", number(chords[l].transmittance)},
+                         {"error", number(chords[l].error())}};
             levels.push_back({{"level", l},
+                              {"chords_against_source", chord},
                               {"resolution", 1u << l},
                               {"stored_nodes", s.storedNodes},
                               {"occupied_nodes", s.occupiedNodes},
@@ -81,6 +104,15 @@ void inspectVto(const std::filesystem::path& file, bool json, std::ostream& out)
                       s.meanOccupiedDensity, s.filterErrorMean, s.filterErrorMax,
                       (unsigned long long)s.filterErrorSamples);
         out << line;
+    }
+    if (!chords.empty()) {
+        out << "against the source " << options.source.string() << ", " << "4096 random chords of the texel:\n"
+            << "level  missing the mesh  level's transmittance  error (> 0: lets more through)\n";
+        for (std::uint32_t l = 0; l < tree.levelCount(); ++l) {
+            std::snprintf(line, sizeof line, "%5u %17.4f %22.4f %+10.4f\n", l, chords[l].visibility, chords[l].transmittance,
+                          chords[l].error());
+            out << line;
+        }
     }
     printChecksums(check, out);
 }

@@ -40,6 +40,40 @@ TEST(SamplerCli, PatternSampleBuildInspect) {
     EXPECT_NE(r.out.find("VOXL"), std::string::npos);
 }
 
+// `vtex inspect texel.vto --source mesh.glb`: each level's chord transmittance against the mesh
+// (octree::measureChordTransmittance). The same chords at every level, so the same visibility;
+// the error is transmittance − visibility; a 300-leaf bush's one-voxel level 0 is far too
+// opaque (the mean density spread over the whole cube: measured −0.2) and its finest level lets
+// more through than level 0.
+TEST(SamplerCli, InspectMeasuresEachLevelAgainstTheSource) {
+    const auto glb = tmp("chords.glb"), vtl = tmp("chords.vtl"), vto = tmp("chords.vto");
+    ASSERT_EQ(runVtex({"pattern", "bush", "--leaves", "300", "-o", glb.string()}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"sample", glb.string(), "-o", vtl.string(), "-r", "32"}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"build", vtl.string(), "-o", vto.string()}).exitStatus, 0);
+    auto r = runVtex({"inspect", vto.string(), "--json", "--source", glb.string()});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    const auto levels = nlohmann::json::parse(r.out)["per_level"];
+    ASSERT_EQ(levels.size(), 6u);
+    const double visibility = levels[0]["chords_against_source"]["visibility"].get<double>();
+    EXPECT_GT(visibility, 0.3);
+    EXPECT_LT(visibility, 1.0);
+    for (const auto& level : levels) {
+        const auto& c = level["chords_against_source"];
+        EXPECT_EQ(c["visibility"].get<double>(), visibility);
+        EXPECT_GT(c["transmittance"].get<double>(), 0.0);
+        EXPECT_LE(c["transmittance"].get<double>(), 1.0);
+        EXPECT_NEAR(c["error"].get<double>(), c["transmittance"].get<double>() - visibility, 1e-12);
+    }
+    EXPECT_LT(levels[0]["chords_against_source"]["error"].get<double>(), -0.05);
+    EXPECT_GT(levels[5]["chords_against_source"]["transmittance"].get<double>(),
+              levels[0]["chords_against_source"]["transmittance"].get<double>());
+    r = runVtex({"inspect", vto.string(), "--source", glb.string()});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    EXPECT_NE(r.out.find("against the source"), std::string::npos);
+    EXPECT_EQ(runVtex({"inspect", vtl.string(), "--source", glb.string()}).exitStatus, 2);
+    EXPECT_EQ(runVtex({"inspect", vto.string(), "--source", tmp("missing.glb").string()}).exitStatus, 3);
+}
+
 TEST(SamplerCli, CorruptedFilesAreRefusedWithTheirSection) {
     const auto glb = tmp("bush.glb"), vtl = tmp("bush.vtl"), vto = tmp("bush.vto");
     ASSERT_EQ(runVtex({"pattern", "bush", "--leaves", "50", "-o", glb.string()}).exitStatus, 0);

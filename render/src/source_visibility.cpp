@@ -1,0 +1,15 @@
+// See source_visibility.h.
+#include <vtex/render/source_visibility.h>
+
+#include "source_bvh.h"
+
+namespace vtex::render {
+
+SourceVisibility::SourceVisibility(const ingest::TriangleMesh& mesh, const octree::VolumeInfo& volume)
+    : mBvh(std::make_unique<detail::SourceBvh>(mesh, volume)) {}
+
+SourceVisibility::~SourceVisibility() = default;
+
+bool SourceVisibility::visible(const Vec3& a, const Vec3& b) const { return !mBvh->occluded(a, b, 0); }
+
+}  // namespace vtex::render
