@@ -3,8 +3,8 @@
 // For a directional light the transmittance toward it, T(x), depends on the point x only, not
 // on the ray that needs it: every texel cell gets a lattice of nodes in its cell coordinates
 // (u, v, w), each holding T at the node (one exact shadow ray, cast the first time a query
-// needs it), and a query interpolates the eight nodes around it trilinearly (the renderer
-// marches the first two lattice steps from the query point exactly, within the cell, and looks
+// needs it), and a query interpolates the optical depth −ln T of the eight nodes around it
+// trilinearly (the renderer marches the first four lattice steps from the query point exactly, within the cell, and looks
 // the lattice up where that march ends). An approximation, bounded against the exact shadow rays by the test
 // CachedShadowsMatchShadowRays.
 //
@@ -27,6 +27,8 @@ namespace vtex::render::detail {
 
 class LightTransmittanceCache {
 public:
+    /// Nodes darker than this count as this dark: the optical depth stays finite (13.8).
+    static constexpr double kDarkest = 1e-6;
     struct Grid {
         int nu = 0, nv = 0, nw = 0;  ///< lattice cells per axis; nw = 0: no grid (plain face)
         std::size_t nodes() const { return std::size_t(nu + 1) * std::size_t(nv + 1) * std::size_t(nw + 1); }
@@ -76,9 +78,12 @@ public:
                 value = float(fill(Vec3(double(iu + du) / g.nu, double(iv + dv) / g.nv, double(iw + dw) / g.nw)));
                 values[index].store(value, std::memory_order_relaxed);
             }
-            out += weight * double(value);
+            // The optical depth, not the transmittance, is interpolated: along the light a bush's
+            // transmittance falls exponentially, a convex function that linear interpolation of T
+            // would overestimate everywhere between the nodes (on the bush field +1 % in the mean).
+            out += weight * -std::log(std::max(double(value), kDarkest));
         }
-        return out;
+        return std::exp(-out);
     }
 
 private:

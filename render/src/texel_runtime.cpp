@@ -12,21 +12,25 @@
 namespace vtex::render::detail {
 namespace {
 
-// The finest level at which the volume lets through what the source mesh does, within
+// The range of levels at which the volume lets through what the source mesh does, within
 // `tolerance` (absolute transmittance, mean over random chords of the whole texel): from the
-// level of least error, finer levels as long as each stays within the tolerance. Finer than
-// that, a voxel stands for a piece of one opaque surface that the exponential medium lets
-// light through (and shadows itself), and the hybrid traces the mesh instead.
-double faithfulLevel(const octree::Octree& tree, const detail::SourceBvh& source, double tau, double tolerance) {
+// level of least error, coarser and finer levels as long as each stays within the tolerance.
+// Coarser than that, a voxel spreads clustered leaves over its whole volume and is too opaque;
+// finer, a voxel stands for a piece of one opaque surface that the exponential medium lets light
+// through (and shadows itself).
+struct FaithfulLevels {
+    int coarsest = 0, finest = 0;
+};
+FaithfulLevels faithfulLevels(const octree::Octree& tree, const SourceBvh& source, double tau, double tolerance) {
     const auto chords = octree::measureChordTransmittance(
         tree, [&](const Vec3& a, const Vec3& b) { return !source.occluded(a, b, 0); }, tau);
-    if (chords.empty()) return std::numeric_limits<double>::infinity();
     std::size_t best = 0;
     for (std::size_t l = 1; l < chords.size(); ++l)
         if (std::abs(chords[l].error()) < std::abs(chords[best].error())) best = l;
-    std::size_t level = best;
-    while (level + 1 < chords.size() && std::abs(chords[level + 1].error()) <= tolerance) ++level;
-    return double(level);
+    std::size_t coarsest = best, finest = best;
+    while (coarsest > 0 && std::abs(chords[coarsest - 1].error()) <= tolerance) --coarsest;
+    while (finest + 1 < chords.size() && std::abs(chords[finest + 1].error()) <= tolerance) ++finest;
+    return {int(coarsest), int(finest)};
 }
 
 }  // namespace
@@ -43,10 +47,19 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             throw InputError(def.volume, "octree has no root");
         t.tau = def.tau;
         t.material = def.material;
-        if (options.hybrid && (def.sourceData || !def.source.empty())) {
+        // With a source, the levels the volume is faithful at are measured (one pass of chords):
+        // shadows keep to them, and the hybrid traces the mesh past the finest of them.
+        if (def.sourceData || !def.source.empty()) {
             t.sourceMesh = def.sourceData ? def.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source));
-            t.source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
-            t.meshLevel = faithfulLevel(*tree, *t.source, def.tau, options.hybridTolerance);
+            auto source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
+            const FaithfulLevels faithful = faithfulLevels(*tree, *source, def.tau, options.hybridTolerance);
+            t.coarsestShadowLevel = faithful.coarsest;
+            if (options.hybrid) {
+                t.meshLevel = faithful.finest;
+                t.source = std::move(source);
+            } else {
+                t.sourceMesh.reset();
+            }
         }
         t.volume = std::make_unique<const MarchVolume>(std::move(tree));
     }

@@ -27,6 +27,10 @@ struct TexelRuntime {
     std::shared_ptr<const ingest::TriangleMesh> sourceMesh;
     std::unique_ptr<const detail::SourceBvh> source;
     double meshLevel = std::numeric_limits<double>::infinity();
+    /// Shadow marches never take a level coarser than this: the coarsest level whose chord
+    /// transmittance is within the hybrid's tolerance of the mesh's (0 without a source). A
+    /// shadow needs no antialiasing, and coarser levels are measurably too opaque.
+    int coarsestShadowLevel = 0;
     /// The mesh's share at continuous level `requested` (LevelChoice::requested).
     double meshWeight(double requested) const {
         return source ? std::clamp(requested - meshLevel, 0.0, 1.0) : 0.0;

@@ -42,12 +42,12 @@ TEST(SamplerCli, PatternSampleBuildInspect) {
 
 // `vtex inspect texel.vto --source mesh.glb`: each level's chord transmittance against the mesh
 // (octree::measureChordTransmittance). The same chords at every level, so the same visibility;
-// the error is transmittance − visibility; a 300-leaf bush's one-voxel level 0 is far too
-// opaque (the mean density spread over the whole cube: measured −0.2) and its finest level lets
-// more through than level 0.
+// the error is transmittance − visibility; the 2000-leaf bush's coarse levels are too opaque
+// (its leaves clustered in a shell, their mean density spread over whole voxels: measured −0.19
+// at level 0, −0.04 at 3) and its finest level lets more through than level 0.
 TEST(SamplerCli, InspectMeasuresEachLevelAgainstTheSource) {
     const auto glb = tmp("chords.glb"), vtl = tmp("chords.vtl"), vto = tmp("chords.vto");
-    ASSERT_EQ(runVtex({"pattern", "bush", "--leaves", "300", "-o", glb.string()}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"pattern", "bush", "-o", glb.string()}).exitStatus, 0);
     ASSERT_EQ(runVtex({"sample", glb.string(), "-o", vtl.string(), "-r", "32"}).exitStatus, 0);
     ASSERT_EQ(runVtex({"build", vtl.string(), "-o", vto.string()}).exitStatus, 0);
     auto r = runVtex({"inspect", vto.string(), "--json", "--source", glb.string()});
@@ -64,7 +64,8 @@ TEST(SamplerCli, InspectMeasuresEachLevelAgainstTheSource) {
         EXPECT_LE(c["transmittance"].get<double>(), 1.0);
         EXPECT_NEAR(c["error"].get<double>(), c["transmittance"].get<double>() - visibility, 1e-12);
     }
-    EXPECT_LT(levels[0]["chords_against_source"]["error"].get<double>(), -0.05);
+    EXPECT_LT(levels[0]["chords_against_source"]["error"].get<double>(), -0.1);
+    EXPECT_LT(levels[3]["chords_against_source"]["error"].get<double>(), -0.02);
     EXPECT_GT(levels[5]["chords_against_source"]["transmittance"].get<double>(),
               levels[0]["chords_against_source"]["transmittance"].get<double>());
     r = runVtex({"inspect", vto.string(), "--source", glb.string()});

@@ -46,7 +46,7 @@ struct ApproximationBudget {
     /// The second level of a blend reuses the first level's shadow rays (docs/render.md); false:
     /// each level casts its own (slower; the exact path the approximation is tested against).
     bool shareShadowRays = true;
-    /// Directional lights: a shadow query inside a texel cell marches two lattice steps toward the
+    /// Directional lights: a shadow query inside a texel cell marches four lattice steps toward the
     /// light exactly, then interpolates a per-cell lattice of this many steps per side (per tile
     /// of the texel across, up to 4 tiles), each node one shadow ray cast on first use
     /// (docs/render.md, "Shadows"); 0: every query casts its own ray (the exact path), as when
