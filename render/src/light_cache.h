@@ -73,15 +73,17 @@ public:
             if (!(weight > 0)) continue;  // a node that does not count is not computed
             const std::size_t index =
                 (std::size_t(iw + dw) * std::size_t(g.nv + 1) + std::size_t(iv + dv)) * std::size_t(g.nu + 1) + std::size_t(iu + du);
-            float value = values[index].load(std::memory_order_relaxed);
-            if (std::isnan(value)) {
-                value = float(fill(Vec3(double(iu + du) / g.nu, double(iv + dv) / g.nv, double(iw + dw) / g.nw)));
-                values[index].store(value, std::memory_order_relaxed);
+            // A node holds the optical depth −ln T toward the light, and that is what is
+            // interpolated: along the light a bush's transmittance falls exponentially, a convex
+            // function that linear interpolation of T would overestimate everywhere between the
+            // nodes (on the bush field +1 % in the mean).
+            float depth = values[index].load(std::memory_order_relaxed);
+            if (std::isnan(depth)) {
+                const double t = fill(Vec3(double(iu + du) / g.nu, double(iv + dv) / g.nv, double(iw + dw) / g.nw));
+                depth = float(-std::log(std::max(t, kDarkest)));
+                values[index].store(depth, std::memory_order_relaxed);
             }
-            // The optical depth, not the transmittance, is interpolated: along the light a bush's
-            // transmittance falls exponentially, a convex function that linear interpolation of T
-            // would overestimate everywhere between the nodes (on the bush field +1 % in the mean).
-            out += weight * -std::log(std::max(double(value), kDarkest));
+            out += weight * double(depth);
         }
         return std::exp(-out);
     }
