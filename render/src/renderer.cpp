@@ -14,7 +14,7 @@
 
 #include "footprint.h"
 #include "frame.h"
-#include "per_light.h"
+#include "span_march.h"
 #include "shadow_queries.h"
 #include "texel_runtime.h"
 #include "march.h"
@@ -81,19 +81,14 @@ double patchSize(const Prim& prim) { return detail::patchSize(prim.p); }
 
 using detail::kTransmittanceCutoff;
 using detail::localScale;
-using detail::PerLight;
+using detail::SpanContext;
+using detail::SpanMarcher;
+using detail::SpanResult;
 using detail::ShadowQueries;
 using detail::TexelRuntime;
 using detail::tile;
 
-// Shadow rays from inside a texel march one level coarser than the camera ray (a cone twice as
-// wide): soft shadows need less detail than what is seen, and this halves their cost.
-constexpr double kShadowConeScale = 2.0;
 
-struct SpanResult {
-    Color radiance = Color::Zero();
-    double transmittance = 1;
-};
 
 struct PathState {
     Color radiance = Color::Zero();
@@ -185,228 +180,58 @@ private:
                                   });
     }
 
+    // A camera ray's span through a texel cell: the level blend of GigaVoxels' cone rule (two
+    // levels marched and blended, a weight under the cut-off skipped) and the mesh/volume hybrid
+    // around it (the source mesh with the share its footprint gives), composited into the path.
     void marchSpan(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, double tIn,
                    double tOut, const Vec3& d, PathState& state, Counters& counters) const {
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
         const int primIndex = int(&prim - mTracer.prims().data());
-        const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
-        const Vec3 delta = p1 - p0;
-        const double length = delta.norm();
-        if (!(length > 0) || !std::isfinite(length)) return;
-        ++counters.segments;
-        const Vec3 dir = delta / length;
-        const Vec3 rMid = 0.5 * (rIn + rOut);
-        const double scale = localScale(prim.cell, rMid, surface);
         const double tMid = 0.5 * (tIn + tOut);
+        const double scale = localScale(prim.cell, 0.5 * (rIn + rOut), surface);
         const int maxLevel = texel.volume->maxLevel();
         const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
-        // A blend weight below mOptions.approximations.blendCutoff goes to the other level, which is then the
-        // only one marched: the image moves by at most that weight times the difference of the
-        // two levels' results (bounded by the test SkippedBlendLevelsMatchTheFullBlend).
-        double fineWeight = choice.fineWeight;
-        if (fineWeight > 0 && fineWeight < mOptions.approximations.blendCutoff) fineWeight = 0;
-        if (fineWeight > 1 - mOptions.approximations.blendCutoff) fineWeight = 1;
-        // The same cut-off for the mesh's share: a share below it is not traced, above 1 − it the
-        // volume is not marched.
-        double meshWeight = texel.meshWeight(choice.requested);
-        if (meshWeight > 0 && meshWeight < mOptions.approximations.blendCutoff) meshWeight = 0;
-        if (meshWeight > 1 - mOptions.approximations.blendCutoff) meshWeight = 1;
+        SpanContext span(mScene, mOptions, mShadows, prim, primIndex, surface, texel, rIn, rOut, tIn, tOut,
+                         state.transmittance, choice.coarse);
+        if (span.length == 0) return;
+        ++counters.segments;
+        // A blend weight below blendCutoff goes to the other level, which is then the only one
+        // marched: the image moves by at most that weight times the difference of the two
+        // levels' results (bounded by the test SkippedBlendLevelsMatchTheFullBlend). The same
+        // cut-off for the mesh's share.
+        const double cutoff = mOptions.approximations.blendCutoff;
+        const auto cut = [cutoff](double w) { return w > 0 && w < cutoff ? 0.0 : w > 1 - cutoff ? 1.0 : w; };
+        const double fineWeight = cut(choice.fineWeight);
+        const double meshWeight = cut(texel.meshWeight(choice.requested));
         counters.mesh += meshWeight;
         if (meshWeight >= 1) {
-            compositeSpan(traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid,
-                          state);
+            compositeSpan(traceSourceSpan(prim, surface, texel, span.p0, span.p1, tIn, tOut, d, counters),
+                          choice.level, tMid, state);
             return;
         }
         if (counters.histogram.size() < std::size_t(maxLevel + 1)) counters.histogram.resize(std::size_t(maxLevel + 1), 0.0);
         if (fineWeight < 1) counters.histogram[std::size_t(choice.coarse)] += (1 - fineWeight) * (1 - meshWeight);
         if (fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += fineWeight * (1 - meshWeight);
-
-        // Light directions go to reference space through the inverse Jacobian of the tiled map,
-        // taken once per span (the mild-deformation assumption again).
-        Mat3 jt = prim.cell.jacobian(rMid);
-        jt.col(0) /= surface.repeatU;
-        jt.col(1) /= surface.repeatV;
-        Mat3 jtInv = jt.inverse();
-        if (!jtInv.allFinite()) jtInv = Mat3::Identity();
-        const Vec3 view = -dir;
-        const Material& m = texel.material;
-
-        const double startT = state.transmittance;
-        const std::size_t lights = mScene.lights.size();
-        // The shadow rays of the first (coarse) march, by light: where along the span they were
-        // taken and what they found. When the second (fine) march of the blend needs a shadow
-        // (same rule: first lit voxel, then each time its transmittance has fallen to a
-        // quarter), it takes the coarse march's nearest one if that was taken within one coarse
-        // voxel of here, instead of casting its own: shadow rays are the costliest part of a
-        // march, and the two levels see the same light through the same texel. An
-        // approximation (the origin moves by at most a coarse voxel), bounded by the test
-        // SharedShadowRaysMatchPerLevelShadowRays.
-        const double shareDistance = 1.0 / double(std::int64_t(1) << choice.coarse);
-        constexpr int kTrackCapacity = 32;
-        struct ShadowTrack {
-            int count = 0;
-            std::array<double, kTrackCapacity> s, t;
-        };
-        PerLight<ShadowTrack> tracks(lights);
-        // A directional light's direction and irradiance do not depend on the point, nor its
-        // reference-space direction within the span: taken once per span.
-        struct SpanLight {
-            bool directional = false;
-            bool usable = false;  ///< directional: lr is finite
-            int latticeSlot = -1; ///< directional, usable, and the cell has a transmittance lattice
-            Vec3 lw = Vec3::Zero(), lr = Vec3::Zero();
-            Color e = Color::Zero();
-            std::optional<ReflectanceKernel> kernel;  ///< directional, usable, fast shading
-        };
-        PerLight<SpanLight> spanLights(lights);
-        bool anyPointLight = false;
-        const auto referenceLight = [&](const Vec3& lw, Vec3& lr) {
-            lr = jtInv * lw;
-            const double len = lr.norm();
-            if (!(len > 0) || !std::isfinite(len)) return false;
-            lr /= len;
-            return true;
-        };
-        for (std::size_t i = 0; i < lights; ++i) {
-            SpanLight& sl = spanLights[i];
-            if (mScene.lights[i].type != LightType::Directional) {
-                anyPointLight = true;
-                continue;
-            }
-            double distance;
-            sl.directional = true;
-            lightAt(mScene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
-            sl.usable = referenceLight(sl.lw, sl.lr);
-            if (sl.usable && mOptions.shading == ShadingMode::Fast) sl.kernel.emplace(sl.lr, view, m.shininess);
-            if (sl.usable) sl.latticeSlot = mShadows.latticeSlot(sl.lw, INFINITY, primIndex);
-        }
-        const double shadowRefresh = std::clamp(mOptions.approximations.shadowRefresh, 1e-6, 1.0);
-        const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
-        const auto run = [&](int level, bool record, double blendWeight) {
-            SpanResult r;
-            PerLight<octree::ReflectanceFactors> lastReflectance(lights);
-            PerLight<char> haveReflectance(lights);
-            double reusedShare = 0;
-            PerLight<double> shadowT(lights);
-            PerLight<double> shadowAt(lights);  // local transmittance when the shadow was taken
-            PerLight<char> shadowValid(lights);
-            PerLight<int> reuseAt(lights);      // reuse: index of the track's current ray
-            counters.voxels += detail::march(*texel.volume, level, p0, dir, length,
-                [&](const GridVoxel& voxel, double s, double ds) {
-                    const SggxMatrix& sMatrix = voxel.s;
-                    const double sigma = texel.tau * double(voxel.density) * detail::normalizedArea(sMatrix, dir);
-                    // 1 − exp rather than expm1 (which takes 1.7× as long here): the opacity is
-                    // only added to and multiplied with quantities of order one, where its
-                    // absolute error (an ulp of 1) is what counts.
-                    const double transmit = std::exp(-sigma * ds);
-                    const double alpha = 1 - transmit;
-                    if (!(alpha > 0)) return true;
-                    const double share = startT * r.transmittance * alpha * blendWeight;
-                    const bool reuse = share < reuseWeight && reusedShare + share <= 10 * reuseWeight;
-                    const double sm = s + 0.5 * ds;
-                    // The voxel's cell coordinates: for point lights and shadow queries only.
-                    const auto cellPoint = [&] {
-                        const Vec3 pt = p0 + sm * dir;
-                        return Vec3(pt.x() / surface.repeatU, pt.y() / surface.repeatV, pt.z());
-                    };
-                    const Color albedo(voxel.albedo[0], voxel.albedo[1], voxel.albedo[2]);
-                    Color lk = m.ambient.cwiseProduct(albedo);
-                    // The world point: for point lights, and for shadow rays.
-                    Vec3 x = Vec3::Zero();
-                    bool haveX = false;
-                    const auto worldPoint = [&]() -> const Vec3& {
-                        if (!haveX) x = prim.cell.map(cellPoint());
-                        haveX = true;
-                        return x;
-                    };
-                    if (anyPointLight) worldPoint();
-                    for (std::size_t i = 0; i < lights; ++i) {
-                        const SpanLight& sl = spanLights[i];
-                        Vec3 lw;
-                        double distance = std::numeric_limits<double>::infinity();
-                        Color e;
-                        if (sl.directional) {
-                            lw = sl.lw;
-                            e = sl.e;
-                        } else if (!lightAt(mScene.lights[i], x, lw, distance, e)) {
-                            continue;
-                        }
-                        // One shadow query at the first lit voxel, another each time the local
-                        // transmittance has fallen below shadowRefresh of what it was at the
-                        // last one: the shadow varies with depth into the texel.
-                        if (!shadowValid[i] || r.transmittance < shadowRefresh * shadowAt[i]) {
-                            ShadowTrack& track = tracks[i];
-                            int nearest = -1;
-                            if (!record) {
-                                // Samples are in increasing s: resume the scan where it stopped.
-                                int& k = reuseAt[i];
-                                while (k + 1 < track.count && track.s[std::size_t(k + 1)] <= sm) ++k;
-                                for (int c = k; c <= std::min(k + 1, track.count - 1); ++c)
-                                    if (std::abs(track.s[std::size_t(c)] - sm) <= shareDistance &&
-                                        (nearest < 0 || std::abs(track.s[std::size_t(c)] - sm) <
-                                                            std::abs(track.s[std::size_t(nearest)] - sm)))
-                                        nearest = c;
-                            }
-                            if (nearest >= 0) {
-                                shadowT[i] = track.t[std::size_t(nearest)];
-                            } else {
-                                const double width = kShadowConeScale * mConeSpread * (tIn + (tOut - tIn) * (sm / length));
-                                const Vec3 rc = cellPoint();
-                                if (sl.latticeSlot >= 0) {
-                                    const ShadowQueries::SpanFrame frame{sl.lr, scale};
-                                    shadowT[i] = mShadows.nearAndCachedShadow(sl.latticeSlot, primIndex, rc, lw, width, counters, &frame);
-                                } else {
-                                    shadowT[i] = mShadows.shadowTransmittance(worldPoint(), lw, distance, width, primIndex, rc, counters);
-                                }
-                                if (record && track.count < kTrackCapacity) {
-                                    track.s[std::size_t(track.count)] = sm;
-                                    track.t[std::size_t(track.count)] = shadowT[i];
-                                    ++track.count;
-                                }
-                            }
-                            shadowAt[i] = r.transmittance;
-                            shadowValid[i] = true;
-                        }
-                        if (shadowT[i] <= 0) continue;
-                        Vec3 lr = sl.lr;
-                        if (sl.directional ? !sl.usable : !referenceLight(lw, lr)) continue;
-                        octree::ReflectanceFactors& f = lastReflectance[i];
-                        if (reuse && haveReflectance[i]) {
-                            reusedShare += share;
-                        } else {
-                            ++counters.reflectance;
-                            f = sl.kernel ? (*sl.kernel)(sMatrix)
-                                : mOptions.shading == ShadingMode::Fast
-                                    ? reflectanceFast(sMatrix, lr, view, m.shininess)
-                                    : reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
-                            haveReflectance[i] = true;
-                        }
-                        lk += shadowT[i] * e.cwiseProduct(m.diffuse.cwiseProduct(albedo) * f.diffuse + m.specular * f.specular);
-                    }
-                    r.radiance += r.transmittance * alpha * lk;
-                    r.transmittance *= transmit;
-                    return startT * r.transmittance > kTransmittanceCutoff;
-                });
-            return r;
-        };
         SpanResult result;
         if (fineWeight >= 1) {
-            result = run(choice.fine, false, 1.0);
+            result = mMarcher.march(span, choice.fine, false, 1.0, counters);
         } else {
-            result = run(choice.coarse, mOptions.approximations.shareShadowRays, 1 - fineWeight);
-            if (fineWeight > 0) {
-                const SpanResult fine = run(choice.fine, false, fineWeight);
-                const double w = fineWeight;
-                result.radiance = (1 - w) * result.radiance + w * fine.radiance;
-                result.transmittance = (1 - w) * result.transmittance + w * fine.transmittance;
-            }
+            // The second (fine) march of a blend takes the first's shadow queries taken within
+            // one coarse voxel (shareShadowRays): the origin moves by at most that, bounded by the
+            // test SharedShadowRaysMatchPerLevelShadowRays.
+            result = mMarcher.march(span, choice.coarse, mOptions.approximations.shareShadowRays, 1 - fineWeight, counters);
+            if (fineWeight > 0) blend(result, mMarcher.march(span, choice.fine, false, fineWeight, counters), fineWeight);
         }
-        if (meshWeight > 0) {
-            const SpanResult mesh = traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters);
-            result.radiance = (1 - meshWeight) * result.radiance + meshWeight * mesh.radiance;
-            result.transmittance = (1 - meshWeight) * result.transmittance + meshWeight * mesh.transmittance;
-        }
+        if (meshWeight > 0)
+            blend(result, traceSourceSpan(prim, surface, texel, span.p0, span.p1, tIn, tOut, d, counters),
+                  meshWeight);
         compositeSpan(result, choice.level, tMid, state);
+    }
+
+    // result ← (1 − w)·result + w·other, colour and transmittance alike.
+    static void blend(SpanResult& result, const SpanResult& other, double w) {
+        result.radiance = (1 - w) * result.radiance + w * other.radiance;
+        result.transmittance = (1 - w) * result.transmittance + w * other.transmittance;
     }
 
     static void compositeSpan(const SpanResult& result, double level, double tMid, PathState& state) {
@@ -454,6 +279,7 @@ private:
     const std::vector<TexelRuntime>& mTexels;
     double mConeSpread;
     ShadowQueries mShadows{mScene, mOptions, mTracer, mSurfaces, mTexels};
+    SpanMarcher mMarcher{mScene, mOptions, mShadows, mConeSpread};
 };
 
 }  // namespace

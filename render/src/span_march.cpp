@@ -1,0 +1,194 @@
+// See span_march.h.
+#include "span_march.h"
+
+#include <vtex/render/texel_march.h>
+
+#include "march.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace vtex::render::detail {
+namespace {
+
+// Shadow rays from inside a texel march one level coarser than the camera ray (a cone twice as
+// wide): soft shadows need less detail than what is seen, and this halves their cost.
+constexpr double kShadowConeScale = 2.0;
+
+// What one march keeps per light as it goes: the last shadow query and the last reflectance.
+struct MarchLight {
+    octree::ReflectanceFactors reflectance;
+    bool haveReflectance = false;
+    double shadow = 0;
+    double shadowAt = 0;  ///< the march's transmittance when the shadow was taken
+    bool shadowValid = false;
+    int reuseAt = 0;      ///< reuse: index of the track's current query
+};
+
+// The recorded query nearest to sm within shareDistance, −1 if none; `k` resumes the scan
+// (queries are recorded, and looked up, in increasing s).
+int nearestRecorded(const SpanContext::ShadowTrack& track, double sm, double shareDistance, int& k) {
+    while (k + 1 < track.count && track.s[std::size_t(k + 1)] <= sm) ++k;
+    int nearest = -1;
+    for (int c = k; c <= std::min(k + 1, track.count - 1); ++c)
+        if (std::abs(track.s[std::size_t(c)] - sm) <= shareDistance &&
+            (nearest < 0 || std::abs(track.s[std::size_t(c)] - sm) < std::abs(track.s[std::size_t(nearest)] - sm)))
+            nearest = c;
+    return nearest;
+}
+
+}  // namespace
+
+SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const ShadowQueries& shadows, const Prim& prim_,
+                         int primIndex_, const SurfaceRuntime& surface_, const TexelRuntime& texel_, const Vec3& rIn,
+                         const Vec3& rOut, double tIn_, double tOut_, double startTransmittance, int coarseLevel)
+    : prim(prim_), primIndex(primIndex_), surface(surface_), texel(texel_), tIn(tIn_), tOut(tOut_),
+      startT(startTransmittance), shareDistance(1.0 / double(std::int64_t(1) << coarseLevel)),
+      lights(scene.lights.size()), tracks(scene.lights.size()) {
+    p0 = tile(rIn, surface);
+    p1 = tile(rOut, surface);
+    const Vec3 delta = p1 - p0;
+    length = delta.norm();
+    if (!(length > 0) || !std::isfinite(length)) {
+        length = 0;
+        return;
+    }
+    dir = delta / length;
+    const Vec3 rMid = 0.5 * (rIn + rOut);
+    scale = localScale(prim.cell, rMid, surface);
+    // Light directions go to reference space through the inverse Jacobian of the tiled map,
+    // taken once per span (the mild-deformation assumption again).
+    Mat3 jt = prim.cell.jacobian(rMid);
+    jt.col(0) /= surface.repeatU;
+    jt.col(1) /= surface.repeatV;
+    jtInv = jt.inverse();
+    if (!jtInv.allFinite()) jtInv = Mat3::Identity();
+    for (std::size_t i = 0; i < scene.lights.size(); ++i) {
+        Light& sl = lights[i];
+        if (scene.lights[i].type != LightType::Directional) {
+            anyPointLight = true;
+            continue;
+        }
+        double distance;
+        sl.directional = true;
+        lightAt(scene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
+        sl.usable = referenceLight(sl.lw, sl.lr);
+        if (sl.usable && options.shading == ShadingMode::Fast) sl.kernel.emplace(sl.lr, Vec3(-dir), texel.material.shininess);
+        if (sl.usable) sl.latticeSlot = shadows.latticeSlot(sl.lw, INFINITY, primIndex);
+    }
+}
+
+bool SpanContext::referenceLight(const Vec3& lw, Vec3& lr) const {
+    lr = jtInv * lw;
+    const double len = lr.norm();
+    if (!(len > 0) || !std::isfinite(len)) return false;
+    lr /= len;
+    return true;
+}
+
+SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double blendWeight, Counters& counters) const {
+    SpanResult r;
+    const std::size_t lights = mScene.lights.size();
+    PerLight<MarchLight> state(lights);
+    const TexelRuntime& texel = span.texel;
+    const Material& m = texel.material;
+    const Vec3 view = -span.dir;
+    const double shadowRefresh = std::clamp(mOptions.approximations.shadowRefresh, 1e-6, 1.0);
+    const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
+    double reusedShare = 0;
+    counters.voxels += detail::march(*texel.volume, level, span.p0, span.dir, span.length,
+        [&](const GridVoxel& voxel, double s, double ds) {
+            const SggxMatrix& sMatrix = voxel.s;
+            const double sigma = texel.tau * double(voxel.density) * detail::normalizedArea(sMatrix, span.dir);
+            // 1 − exp rather than expm1 (which takes 1.7× as long here): the opacity is only
+            // added to and multiplied with quantities of order one, where its absolute error (an
+            // ulp of 1) is what counts.
+            const double transmit = std::exp(-sigma * ds);
+            const double alpha = 1 - transmit;
+            if (!(alpha > 0)) return true;
+            // Reflectance reuse (RenderOptions::approximations.reflectanceReuseWeight): a voxel
+            // with a tiny share of the pixel takes the march's last reflectance for its light.
+            const double share = span.startT * r.transmittance * alpha * blendWeight;
+            const bool reuse = share < reuseWeight && reusedShare + share <= 10 * reuseWeight;
+            const double sm = s + 0.5 * ds;
+            // The voxel's cell coordinates and world point: for point lights and shadow queries.
+            const auto cellPoint = [&] {
+                const Vec3 pt = span.p0 + sm * span.dir;
+                return Vec3(pt.x() / span.surface.repeatU, pt.y() / span.surface.repeatV, pt.z());
+            };
+            Vec3 x = Vec3::Zero();
+            bool haveX = false;
+            const auto worldPoint = [&]() -> const Vec3& {
+                if (!haveX) x = span.prim.cell.map(cellPoint());
+                haveX = true;
+                return x;
+            };
+            if (span.anyPointLight) worldPoint();
+            const Color albedo(voxel.albedo[0], voxel.albedo[1], voxel.albedo[2]);
+            Color lk = m.ambient.cwiseProduct(albedo);
+            for (std::size_t i = 0; i < lights; ++i) {
+                const SpanContext::Light& sl = span.lights[i];
+                MarchLight& ml = state[i];
+                Vec3 lw;
+                double distance = std::numeric_limits<double>::infinity();
+                Color e;
+                if (sl.directional) {
+                    lw = sl.lw;
+                    e = sl.e;
+                } else if (!lightAt(mScene.lights[i], x, lw, distance, e)) {
+                    continue;
+                }
+                // A shadow query at the first lit voxel, another each time the march's
+                // transmittance has fallen below shadowRefresh of what it was at the last one
+                // (1, the default: at every absorbing voxel).
+                if (!ml.shadowValid || r.transmittance < shadowRefresh * ml.shadowAt) {
+                    SpanContext::ShadowTrack& track = span.tracks[i];
+                    const int nearest = record ? -1 : nearestRecorded(track, sm, span.shareDistance, ml.reuseAt);
+                    if (nearest >= 0) {
+                        ml.shadow = track.t[std::size_t(nearest)];
+                    } else {
+                        const double width =
+                            kShadowConeScale * mConeSpread * (span.tIn + (span.tOut - span.tIn) * (sm / span.length));
+                        const Vec3 rc = cellPoint();
+                        if (sl.latticeSlot >= 0) {
+                            const ShadowQueries::SpanFrame frame{sl.lr, span.scale};
+                            ml.shadow = mShadows.nearAndCachedShadow(sl.latticeSlot, span.primIndex, rc, lw, width, counters, &frame);
+                        } else {
+                            ml.shadow = mShadows.shadowTransmittance(worldPoint(), lw, distance, width, span.primIndex, rc, counters);
+                        }
+                        if (record && track.count < SpanContext::kTrackCapacity) {
+                            track.s[std::size_t(track.count)] = sm;
+                            track.t[std::size_t(track.count)] = ml.shadow;
+                            ++track.count;
+                        }
+                    }
+                    ml.shadowAt = r.transmittance;
+                    ml.shadowValid = true;
+                }
+                if (ml.shadow <= 0) continue;
+                Vec3 lr = sl.lr;
+                if (sl.directional ? !sl.usable : !span.referenceLight(lw, lr)) continue;
+                if (reuse && ml.haveReflectance) {
+                    reusedShare += share;
+                } else {
+                    ++counters.reflectance;
+                    ml.reflectance = sl.kernel ? (*sl.kernel)(sMatrix)
+                                     : mOptions.shading == ShadingMode::Fast
+                                         ? reflectanceFast(sMatrix, lr, view, m.shininess)
+                                         : reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
+                    ml.haveReflectance = true;
+                }
+                const octree::ReflectanceFactors& f = ml.reflectance;
+                lk += ml.shadow * e.cwiseProduct(m.diffuse.cwiseProduct(albedo) * f.diffuse + m.specular * f.specular);
+            }
+            r.radiance += r.transmittance * alpha * lk;
+            r.transmittance *= transmit;
+            return span.startT * r.transmittance > kTransmittanceCutoff;
+        });
+    return r;
+}
+
+}  // namespace vtex::render::detail

@@ -1,0 +1,89 @@
+// One ray span through a texel cell, marched at one octree level (docs/render.md, "Inside a
+// texel"): extinction τρÂ(ω), front-to-back compositing, the voxels' Phong reflectance of the
+// ellipsoid lit through shadow queries. The level blend and the mesh/volume hybrid around it
+// are the integrator's (renderer.cpp); the shadows are ShadowQueries'.
+#pragma once
+
+#include <vtex/render/renderer.h>
+#include <vtex/render/scene.h>
+#include <vtex/render/shading.h>
+
+#include "frame.h"
+#include "per_light.h"
+#include "shadow_queries.h"
+#include "texel_runtime.h"
+
+#include <array>
+#include <optional>
+
+namespace vtex::render::detail {
+
+struct SpanResult {
+    Color radiance = Color::Zero();
+    double transmittance = 1;
+};
+
+/// What a span's marches share, whatever their level: the segment in tiled reference space,
+/// the lights as seen from it (a directional light's direction, irradiance, reference-space
+/// direction and reflectance kernel are constant along the span), and the shadow queries the
+/// first march took, which a second march of a blend may reuse.
+struct SpanContext {
+    static constexpr int kTrackCapacity = 32;
+    /// The shadow queries of the first (coarse) march of a blend, by light: where along the span
+    /// they were taken and what they found.
+    struct ShadowTrack {
+        int count = 0;
+        std::array<double, kTrackCapacity> s, t;
+    };
+    struct Light {
+        bool directional = false;
+        bool usable = false;   ///< directional: lr is finite
+        int latticeSlot = -1;  ///< directional, usable, and the cell has a transmittance lattice
+        Vec3 lw = Vec3::Zero(), lr = Vec3::Zero();
+        Color e = Color::Zero();
+        std::optional<ReflectanceKernel> kernel;  ///< directional, usable, fast shading
+    };
+
+    SpanContext(const Scene& scene, const RenderOptions& options, const ShadowQueries& shadows, const Prim& prim,
+                int primIndex, const SurfaceRuntime& surface, const TexelRuntime& texel, const Vec3& rIn, const Vec3& rOut,
+                double tIn, double tOut, double startTransmittance, int coarseLevel);
+
+    /// The light direction lw (world) in unit tiled reference space; false where undefined.
+    bool referenceLight(const Vec3& lw, Vec3& lr) const;
+
+    const Prim& prim;
+    int primIndex;
+    const SurfaceRuntime& surface;
+    const TexelRuntime& texel;
+    Vec3 p0, p1, dir;      ///< tiled reference space; dir unit
+    double length = 0;     ///< 0: an empty span, not marched
+    double tIn, tOut;      ///< along the camera ray
+    double scale = 1;      ///< world length per reference unit at the span's middle
+    double startT = 1;     ///< the path's transmittance where the span starts
+    Mat3 jtInv;            ///< world → tiled reference directions at the span's middle
+    /// A second march takes a recorded shadow query within this distance (one coarse voxel).
+    double shareDistance = 1;
+    bool anyPointLight = false;
+    PerLight<Light> lights;
+    PerLight<ShadowTrack> tracks;
+};
+
+class SpanMarcher {
+public:
+    SpanMarcher(const Scene& scene, const RenderOptions& options, const ShadowQueries& shadows, double coneSpread)
+        : mScene(scene), mOptions(options), mShadows(shadows), mConeSpread(coneSpread) {}
+
+    /// The span's march at `level`, its colour and transmittance weighted by nothing (the blend
+    /// weight only enters the reflectance-reuse budget). `record`: keep this march's shadow
+    /// queries in the context for a second march; otherwise reuse recorded ones within
+    /// SpanContext::shareDistance (RenderOptions::approximations.shareShadowRays).
+    SpanResult march(SpanContext& span, int level, bool record, double blendWeight, Counters& counters) const;
+
+private:
+    const Scene& mScene;
+    const RenderOptions& mOptions;
+    const ShadowQueries& mShadows;
+    double mConeSpread;
+};
+
+}  // namespace vtex::render::detail
