@@ -238,7 +238,7 @@ double DeformedMesh::selfIntersectionGap(const Vec3& o) const {
 }
 
 std::optional<DeformedMesh::Hit> DeformedMesh::intersect(const Vec3& o, const Vec3& d, double tNear, double tFar) const {
-    if (mSourceTriangle.empty()) return std::nullopt;
+    if (mSourceTriangle.empty() || !embreeCanTrace(o, d)) return std::nullopt;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rayhit = embreeRayHit(o, d, tNear, tFar);
@@ -259,7 +259,7 @@ std::optional<DeformedMesh::Hit> DeformedMesh::intersect(const Vec3& o, const Ve
 }
 
 bool DeformedMesh::occluded(const Vec3& o, const Vec3& d, double tNear, double tFar) const {
-    if (mSourceTriangle.empty()) return false;
+    if (mSourceTriangle.empty() || !embreeCanTrace(o, d)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay ray = embreeRay(o, d, std::max(tNear, selfIntersectionGap(o)), tFar);

@@ -12,6 +12,16 @@
 
 namespace vtex::render::detail {
 
+/// Whether Embree 3 can take a ray from `origin` along `direction`: it asserts on a component
+/// that is not finite or beyond ±1.844e18 (FLT_LARGE). Every trace and occlusion query checks
+/// this first and treats a ray it cannot take as a miss; scenes are refused long before
+/// (frame.h, kMaxSceneCoordinate), so only a ray gone astray can fail it.
+inline bool embreeCanTrace(const Vec3& origin, const Vec3& direction) {
+    constexpr double kLimit = 1e18;
+    return origin.allFinite() && direction.allFinite() && origin.cwiseAbs().maxCoeff() < kLimit &&
+           direction.cwiseAbs().maxCoeff() < kLimit;
+}
+
 inline RTCRay embreeRay(const Vec3& origin, const Vec3& direction, double tNear, double tFar) {
     RTCRay ray;
     ray.org_x = float(origin.x());

@@ -9,7 +9,26 @@
 
 namespace vtex::render::detail {
 
+namespace {
+
+bool inRange(const Vec3& p) { return p.allFinite() && p.cwiseAbs().maxCoeff() <= kMaxSceneCoordinate; }
+
+// The camera and the lights within kMaxSceneCoordinate (scene files are checked here too, for
+// scenes built in memory).
+void checkSceneRange(const Scene& scene) {
+    static_assert(kMaxSceneCoordinate == 1e12, "the messages say 1e12");
+    const std::string limit = " beyond ±1e12 (the renderers' exact range)";
+    if (!inRange(scene.camera.position)) throw InputError(scene.file, "a coordinate" + limit, "camera.position");
+    if (!inRange(scene.camera.lookAt)) throw InputError(scene.file, "a coordinate" + limit, "camera.look_at");
+    for (std::size_t i = 0; i < scene.lights.size(); ++i)
+        if (scene.lights[i].type == LightType::Point && !inRange(scene.lights[i].position))
+            throw InputError(scene.file, "a coordinate" + limit, "light[" + std::to_string(i) + "].position");
+}
+
+}  // namespace
+
 SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
+    checkSceneRange(scene);
     SceneGeometry geometry;
     std::vector<Prim> prims;
     for (std::size_t si = 0; si < scene.surfaces.size(); ++si) {
@@ -30,6 +49,10 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
             prim.face = int(f);
             if (!baseFaceCorners(*mesh, f, prim.p, prim.n))
                 throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
+            for (const Vec3& corner : prim.p)  // the shell's top is within `height` of its corners
+                if (!inRange(corner) || !(corner.cwiseAbs().maxCoeff() + std::abs(def.height) <= kMaxSceneCoordinate))
+                    throw InputError(def.mesh, "face " + std::to_string(f) + " has a corner (or its shell) beyond ±1e12, "
+                                     "the renderers' exact range");
             if (def.texel) {
                 prim.cell = TrilinearCell(prim.p, prim.n, def.height, def.placement == Placement::Under);
                 ++geometry.cells;

@@ -41,6 +41,13 @@ struct SceneGeometry {
     std::uint64_t cells = 0;
 };
 
+/// The largest coordinate a scene may have (camera, lights, base-mesh corners and the tops of
+/// their shells), in world units. Embree 3 asserts on a ray component beyond ±1.84e18
+/// (FLT_LARGE), and the patch and cell tests run in double precision: at 1e12 a unit-sized
+/// feature keeps ~1e-4 of absolute precision, further out the geometry is no longer what the
+/// scene says. Scenes past it are refused (vtex::InputError naming the key).
+inline constexpr double kMaxSceneCoordinate = 1e12;
+
 /// Loads the base meshes and builds the BVH. With `cellsAsFloors`, a textured face becomes the
 /// plain patch of its cell's floor (w = 0) instead of a cell: for renderers that put the texel's
 /// content into the BVH themselves. Throws vtex::InputError naming the mesh.

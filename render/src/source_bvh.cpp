@@ -129,6 +129,7 @@ std::optional<SourceHit> SourceBvh::intersect(const Vec3& p0, const Vec3& p1, do
     forEachPiece(p0, p1, sMin, [&](const Vec3& origin, double s0, double s1) {
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
+        if (!embreeCanTrace(origin, delta)) return false;
         RTCRayHit rayhit = embreeRayHit(origin, delta, s0, s1);
         rtcIntersect1(static_cast<RTCScene>(mTraced), &context, &rayhit);
         if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
@@ -152,6 +153,7 @@ bool SourceBvh::occluded(const Vec3& p0, const Vec3& p1, double sMin) const {
     return forEachPiece(p0, p1, sMin, [&](const Vec3& origin, double s0, double s1) {
         RTCIntersectContext context;
         rtcInitIntersectContext(&context);
+        if (!embreeCanTrace(origin, delta)) return false;
         RTCRay ray = embreeRay(origin, delta, s0, s1);
         rtcOccluded1(static_cast<RTCScene>(mTraced), &context, &ray);
         return ray.tfar < 0;  // Embree marks an occluded ray with tfar = −∞

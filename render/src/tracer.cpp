@@ -5,6 +5,8 @@
 // (the documented Embree 3 way to pass per-ray data to user geometry callbacks).
 #include "tracer.h"
 
+#include "embree_ray.h"
+
 #include <vtex/core/error.h>
 
 #include <embree3/rtcore.h>
@@ -158,6 +160,7 @@ Tracer::~Tracer() {
 }
 
 std::optional<Hit> Tracer::trace(const Vec3& o, const Vec3& d, double tNear, double tFar, SpanCache* cache) const {
+    if (!embreeCanTrace(o, d)) return std::nullopt;  // Embree would assert (embree_ray.h)
     if (mPrims.empty()) return std::nullopt;
     TraceContext ctx;
     rtcInitIntersectContext(&ctx.context);
