@@ -2,6 +2,7 @@
 #include "registry.h"
 
 #include <cstdio>
+#include <cmath>
 #include <iostream>
 #include <map>
 
@@ -35,6 +36,24 @@ const Inspector* findInspector(const std::string& extension) {
     const auto& registry = inspectorRegistry();
     const auto found = registry.find(extension);
     return found == registry.end() ? nullptr : &found->second;
+}
+
+CLI::Validator finiteNumber() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            std::size_t used = 0;
+            double value = 0;
+            try {
+                value = std::stod(text, &used);
+            } catch (const std::out_of_range&) {
+                return "must be a finite number";
+            } catch (const std::exception&) {
+                return "must be a number";
+            }
+            if (used != text.size() || !std::isfinite(value)) return "must be a finite number";
+            return {};
+        },
+        "NUMBER");
 }
 
 CLI::Validator powerOfTwo(unsigned long long largest) {

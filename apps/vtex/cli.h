@@ -53,6 +53,10 @@ using Inspector = std::function<void(const std::filesystem::path& file, const In
 bool registerInspector(const std::string& extension, Inspector inspector);
 const Inspector* findInspector(const std::string& extension);
 
+/// Accepts a finite number: CLI11's ranges let NaN through (every comparison with it is false),
+/// and an infinite or NaN flag would reach the stages as a value. Checked before any range.
+CLI::Validator finiteNumber();
+
 /// Accepts a power of two from 1 to `largest` (voxel resolutions).
 CLI::Validator powerOfTwo(unsigned long long largest);
 

@@ -32,6 +32,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     app.add_option("--tolerance", flags->tolerance,
                    "Drop children within this of their parent (density relative, ellipsoid and albedo "
                    "absolute); 0 keeps only exactly constant regions")
+        ->check(finiteNumber())
         ->capture_default_str()
         ->check(CLI::Range(0.0, 1e6));
     app.add_option("--filter-error-samples", flags->filterErrorSamples,

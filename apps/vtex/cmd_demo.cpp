@@ -20,6 +20,7 @@ const bool registered = registerCommand(90, [](CLI::App& app) -> Action {
         ->check(CLI::Range(4u, 1024u))
         ->check(powerOfTwo(1024));
     app.add_option("--scale", options->imageScale, "Image size relative to 768x576")
+        ->check(finiteNumber())
         ->capture_default_str()
         ->check(CLI::Range(0.05, 4.0));
     app.add_option("--seed", options->seed, "Seed of the procedural patterns")->capture_default_str();

@@ -32,6 +32,7 @@ const bool registered = registerCommand(10, [](CLI::App& app) -> Action {
         ->check(CLI::PositiveNumber);
     app.add_option("--weld-tolerance", flags->options.weldTolerance,
                    "Merge vertices closer than this fraction of the bounding-box diagonal")
+        ->check(finiteNumber())
         ->capture_default_str()
         ->check(CLI::Range(0.0, 0.01));
     app.add_flag("--drop-invalid", flags->options.dropInvalidFaces,

@@ -37,8 +37,10 @@ const bool registered = registerCommand(15, [](CLI::App& app) -> Action {
         ->check(CLI::Range(1, 10'000'000));
     app.add_option("--fluctuation", flags->options.fluctuation,
                    "Angular fluctuation of blades and hairs, radians (grass 0.25, fur 0.15)")
+        ->check(finiteNumber())
         ->check(CLI::Range(0.0, 3.14159));
     app.add_option("--lean", flags->options.leanDegrees, "Mean lean of blades and hairs toward +x, degrees")
+        ->check(finiteNumber())
         ->check(CLI::Range(-80.0, 80.0));
     app.add_option("--variant", flags->options.variant, "brushed: concentric (default) or radial")
         ->check(CLI::IsMember({"concentric", "radial"}));

@@ -33,9 +33,11 @@ const bool registered = registerCommand(45, [](CLI::App& app) -> Action {
         ->capture_default_str();
     app.add_option("--tolerance", a->tolerance,
                    "Deformed mode: largest distance of a subdivided triangle from the deformed surface, fraction of the cell size")
+        ->check(finiteNumber())
         ->check(CLI::Range(1e-6, 1.0))
         ->capture_default_str();
     app.add_option("--max-memory", a->maxMemoryGiB, "Deformed mode: refuse scenes whose deformed triangles need more (GiB)")
+        ->check(finiteNumber())
         ->check(CLI::Range(1e-6, 1024.0))
         ->capture_default_str();
     return [a](const GlobalOptions& global) {

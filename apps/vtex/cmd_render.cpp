@@ -29,11 +29,13 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         ->check(CLI::Range(1, 4096))
         ->capture_default_str();
     app.add_option("--lod-bias", a->lodBias, "Octree level bias: +1 is one level coarser")
+        ->check(finiteNumber())
         ->check(CLI::Range(-32.0, 32.0))
         ->capture_default_str();
     app.add_option("--shadow-refresh", a->shadowRefresh,
                    "A new shadow query once a march's transmittance falls below this fraction of the last "
                    "query's (1, the default: a query at every voxel; below 1 faster, deeper voxels too bright)")
+        ->check(finiteNumber())
         ->check(CLI::Range(0.001, 1.0))
         ->capture_default_str();
     app.add_flag("--exact", a->exact,

@@ -38,6 +38,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         ->capture_default_str()
         ->check(CLI::IsMember({"auto", "on", "off"}));
     app.add_option("--solid-density", flags->solidDensity, "Density of solid voxels, 1/length (0 = 16·N)")
+        ->check(finiteNumber())
         ->check(CLI::NonNegativeNumber);
     app.add_option("--bounds", flags->bounds,
                    "Source → unit cube: auto (unit if the mesh fits in [0,1]³, else fit), unit, fit")

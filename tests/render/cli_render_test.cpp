@@ -117,3 +117,25 @@ TEST(ReferenceCli, BothModesWriteTheirFilesAndMissingSourcesExitThree) {
     EXPECT_NE(big.err.find("--mode embedded"), std::string::npos) << big.err;
     EXPECT_FALSE(fs::exists(dir / "big.exr"));
 }
+
+// Floating flags that are not finite numbers are bad usage naming the flag (exit 2), for every
+// command that has one: CLI11's ranges let NaN through (issue 14, item 7).
+TEST(RenderCli, FlagsThatAreNotFiniteNumbersAreRefusedNamingTheFlag) {
+    const fs::path dir = makeSceneDir("finite");
+    const std::string scene = (dir / "scene.toml").string(), out = (dir / "x.exr").string();
+    const std::vector<std::vector<std::string>> commands = {
+        {"render", scene, "-o", out, "--lod-bias"},     {"render", scene, "-o", out, "--shadow-refresh"},
+        {"reference", scene, "-o", out, "--tolerance"}, {"reference", scene, "-o", out, "--max-memory"},
+        {"build", "in.vtl", "-o", "x.vto", "--tolerance"}, {"sample", "in.glb", "-o", "x.vtl", "--solid-density"},
+        {"pattern", "grass", "-o", "x.glb", "--fluctuation"}, {"pattern", "grass", "-o", "x.glb", "--lean"},
+        {"ingest", "in.obj", "-o", "x.glb", "--weld-tolerance"}, {"demo", "-o", "d", "--scale"}};
+    for (const auto& command : commands)
+        for (const std::string value : {"nan", "inf", "-inf", "1e999", "0.5x"}) {
+            std::vector<std::string> args = command;
+            args.push_back(value);
+            const auto r = runVtex(args);
+            EXPECT_EQ(r.exitStatus, 2) << args[0] << " " << command.back() << " " << value << ": " << r.err;
+            EXPECT_NE(r.err.find(command.back()), std::string::npos) << r.err;
+        }
+    EXPECT_FALSE(fs::exists(out));
+}
