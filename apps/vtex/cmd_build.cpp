@@ -2,6 +2,7 @@
 // filtered and compressed (octree library).
 #include "cli.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/octree/octree.h>
 
 #include <chrono>
@@ -39,6 +40,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
                    "Nodes per level on which the filter error is measured (0 = all)")
         ->capture_default_str();
     return [flags](const GlobalOptions& global) {
+        checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
         const auto start = std::chrono::steady_clock::now();
         const octree::SparseVolume volume = octree::readVtl(flags->input);
         octree::BuildOptions options;

@@ -2,6 +2,7 @@
 // channel means and a's bias against b, and the RMSE split into 4×4-block and pixel scales.
 #include "cli.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 #include <vtex/render/compare.h>
 
@@ -87,6 +88,7 @@ const bool registered = registerCommand(60, [](CLI::App& app) -> Action {
     app.add_flag("--json", o->json, "Print the metrics as JSON on stdout");
     app.add_option("--diff", o->diff, "Write a PNG heat map of the per-pixel error, full scale at the worst pixel");
     return [o](const GlobalOptions&) {
+        if (!o->diff.empty()) checkOutputPath(o->diff, {o->a, o->b});  // before any work (atomic_file.h)
         const auto channelsA = render::comparedChannels(o->a);
         const auto channelsB = render::comparedChannels(o->b);
         if (channelsA != channelsB)

@@ -39,6 +39,7 @@ const bool registered = registerCommand(10, [](CLI::App& app) -> Action {
                  "Drop faces with an index out of range or a NaN/Inf coordinate (counted in the "
                  "report) instead of refusing the file");
     return [flags](const GlobalOptions& global) {
+        checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
         TerminalProgress progress(global);
         ingest::IngestOptions options = flags->options;
         options.progress = &progress;

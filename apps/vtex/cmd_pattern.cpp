@@ -2,6 +2,7 @@
 // library, vtex/sampler/patterns.h).
 #include "cli.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/ingest/ingest.h>
 #include <vtex/sampler/patterns.h>
 
@@ -45,6 +46,7 @@ const bool registered = registerCommand(15, [](CLI::App& app) -> Action {
     app.add_option("--variant", flags->options.variant, "brushed: concentric (default) or radial")
         ->check(CLI::IsMember({"concentric", "radial"}));
     return [flags](const GlobalOptions& global) {
+        checkOutputPath(flags->output);  // before any work (atomic_file.h)
         sampler::PatternOptions options = flags->options;
         if (flags->leaves > 0) {
             if (flags->name != "bush") throw CLI::ValidationError("--leaves", "only for the bush pattern");

@@ -2,6 +2,7 @@
 // finest level of a texel (sampler library).
 #include "cli.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 #include <vtex/ingest/ingest.h>
 #include <vtex/sampler/sampler.h>
@@ -48,6 +49,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
                    "Refuse before starting if the estimated footprint exceeds this (e.g. 4GiB, 512MB)")
         ->transform(CLI::AsSizeValue(false));
     return [flags](const GlobalOptions& global) {
+        checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
         const auto start = std::chrono::steady_clock::now();
         const ingest::TriangleMesh mesh = ingest::loadMesh(flags->input);
         sampler::SampleOptions options;

@@ -1,5 +1,6 @@
 #include "image_command.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/render/image.h>
 
 namespace vtex::cli {
@@ -17,6 +18,9 @@ void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::st
 }
 
 render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global) {
+    // Every output checked before any work (atomic_file.h).
+    for (const std::string& output : {args.output, args.png, args.stats})
+        if (!output.empty()) checkOutputPath(output, {args.scene});
     render::Scene scene = render::loadScene(args.scene);
     for (const auto& w : scene.warnings) warning(global, w);
     return scene;

@@ -28,10 +28,34 @@ void syncPath(const std::filesystem::path& path, bool isDirectory) {
     if (status != 0 && !isDirectory) throw IoError(path, "cannot flush to disk: " + reason);
 }
 
+const char* kindOf(std::filesystem::file_type type) {
+    switch (type) {
+    case std::filesystem::file_type::directory: return "a directory";
+    case std::filesystem::file_type::fifo: return "a FIFO";
+    case std::filesystem::file_type::character: return "a character device";
+    case std::filesystem::file_type::block: return "a block device";
+    case std::filesystem::file_type::socket: return "a socket";
+    default: return "not a regular file";
+    }
+}
+
 }  // namespace
+
+void checkOutputPath(const std::filesystem::path& target, const std::vector<std::filesystem::path>& inputs) {
+    std::error_code error;
+    const auto status = std::filesystem::status(target, error);
+    if (error || !std::filesystem::exists(status)) return;  // a new path
+    if (status.type() != std::filesystem::file_type::regular)
+        throw InputError(target, std::string("output is ") + kindOf(status.type()) +
+                                     ": vtex writes only regular files or new paths");
+    for (const auto& input : inputs)
+        if (!input.empty() && std::filesystem::equivalent(target, input, error))
+            throw InputError(target, "output is the command's own input " + input.string());
+}
 
 AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::move(target)) {
     if (mTarget.empty()) throw IoError(mTarget, "empty output path");
+    if (!std::filesystem::is_directory(mTarget)) checkOutputPath(mTarget);
     if (std::filesystem::is_directory(mTarget))
         throw IoError(mTarget, "is a directory, expected a file name");
     std::filesystem::path directory = mTarget.parent_path();

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string_view>
+#include <vector>
 
 namespace vtex {
 
@@ -41,6 +42,13 @@ private:
     std::ofstream mStream;
     bool mCommitted = false;
 };
+
+/// Refuses (vtex::InputError naming `target`) an output path that exists and is not a regular
+/// file once links are followed — a directory, a FIFO, a device, a socket: the rename of an
+/// atomic output would replace it (as root, `-o /dev/null` would destroy /dev/null) — or that
+/// is the same file as one of `inputs` (`-o scene.toml` would replace the scene). A command calls
+/// it for each of its outputs before any work; AtomicOutputFile calls it again when created.
+void checkOutputPath(const std::filesystem::path& target, const std::vector<std::filesystem::path>& inputs = {});
 
 /// Writes `bytes` to `target` atomically. Throws IoError.
 void writeFileAtomically(const std::filesystem::path& target, std::string_view bytes);

@@ -1,0 +1,93 @@
+// Outputs are regular files or new paths (issue 14, item 2): every command refuses, before any
+// work and with exit 3 naming the path, an output that is a directory, a FIFO, a character
+// device or the command's own input, and leaves it as it was.
+#include "run_vtex.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+
+using vtex::test::runVtex;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Specials {
+    fs::path dir, fifo, device, folder;
+    bool haveDevice = false;
+};
+
+// A FIFO, a directory and (as root) a character device like /dev/null, made in a fresh folder.
+Specials makeSpecials(const std::string& name) {
+    Specials s;
+    s.dir = fs::path(VTEX_TEST_TMP) / "outputs" / name;
+    fs::remove_all(s.dir);
+    fs::create_directories(s.dir / "folder");
+    s.fifo = s.dir / "fifo";
+    s.device = s.dir / "null";
+    s.folder = s.dir / "folder";
+    EXPECT_EQ(::mkfifo(s.fifo.c_str(), 0600), 0);
+    s.haveDevice = ::mknod(s.device.c_str(), S_IFCHR | 0600, makedev(1, 3)) == 0;
+    if (!s.haveDevice) std::cout << "no character device: mknod needs root here; that case is skipped\n";
+    return s;
+}
+
+// Runs `args` with OUT replaced by `target`; expects exit 3 naming it, and `target` unchanged.
+void expectRefused(std::vector<std::string> args, const fs::path& target, fs::file_type kind) {
+    for (auto& a : args)
+        if (a == "OUT") a = target.string();
+    const auto r = runVtex(args);
+    EXPECT_EQ(r.exitStatus, 3) << args[0] << " → " << target << ": " << r.err;
+    EXPECT_NE(r.err.find(target.string()), std::string::npos) << r.err;
+    EXPECT_EQ(fs::symlink_status(target).type(), kind) << target << " was replaced";
+}
+
+}  // namespace
+
+TEST(Outputs, NoCommandReplacesADeviceAFifoADirectoryOrItsInput) {
+    const Specials s = makeSpecials("all");
+    const fs::path glb = s.dir / "grass.glb", vtl = s.dir / "grass.vtl", vto = s.dir / "grass.vto";
+    ASSERT_EQ(runVtex({"pattern", "grass", "--count", "4", "-o", glb.string()}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"sample", glb.string(), "-o", vtl.string(), "-r", "8", "--cyclic"}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"build", vtl.string(), "-o", vto.string()}).exitStatus, 0);
+    const fs::path scene = s.dir / "scene.toml";
+    std::ofstream(s.dir / "plane.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    std::ofstream(scene) << "[camera]\nposition = [0.5, -2, 1.5]\nlook_at = [0.5, 0.5, 0]\nwidth = 8\nheight = 6\n"
+                            "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n"
+                            "[[surface]]\nmesh = \"plane.obj\"\n";
+    const fs::path exr = s.dir / "a.exr";
+    ASSERT_EQ(runVtex({"render", scene.string(), "-o", exr.string()}).exitStatus, 0);
+    const std::vector<std::vector<std::string>> commands = {
+        {"pattern", "grass", "-o", "OUT"},
+        {"ingest", glb.string(), "-o", "OUT"},
+        {"sample", glb.string(), "-o", "OUT", "-r", "8"},
+        {"build", vtl.string(), "-o", "OUT"},
+        {"render", scene.string(), "-o", "OUT"},
+        {"render", scene.string(), "-o", (s.dir / "b.exr").string(), "--png", "OUT"},
+        {"render", scene.string(), "-o", (s.dir / "c.exr").string(), "--stats", "OUT"},
+        {"reference", scene.string(), "-o", "OUT"},
+        {"compare", exr.string(), exr.string(), "--diff", "OUT"}};
+    for (const auto& command : commands) {
+        expectRefused(command, s.fifo, fs::file_type::fifo);
+        expectRefused(command, s.folder, fs::file_type::directory);
+        if (s.haveDevice) expectRefused(command, s.device, fs::file_type::character);
+    }
+    // The command's own input.
+    expectRefused({"ingest", glb.string(), "-o", "OUT"}, glb, fs::file_type::regular);
+    expectRefused({"sample", glb.string(), "-o", "OUT", "-r", "8"}, glb, fs::file_type::regular);
+    expectRefused({"build", vtl.string(), "-o", "OUT"}, vtl, fs::file_type::regular);
+    expectRefused({"render", scene.string(), "-o", "OUT"}, scene, fs::file_type::regular);
+    expectRefused({"compare", exr.string(), exr.string(), "--diff", "OUT"}, exr, fs::file_type::regular);
+    // Nothing was written beside them (the outputs of the refused renders, temporaries).
+    for (const auto& entry : fs::directory_iterator(s.dir)) {
+        const std::string name = entry.path().filename().string();
+        EXPECT_EQ(name.find(".tmp."), std::string::npos) << name;
+        EXPECT_NE(name, "b.exr");
+        EXPECT_NE(name, "c.exr");
+    }
+}
