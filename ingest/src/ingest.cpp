@@ -2,6 +2,7 @@
 #include "detail.h"
 
 #include <vtex/core/error.h>
+#include <vtex/core/input_file.h>
 #include <vtex/core/progress.h>
 
 #include <nlohmann/json.hpp>
@@ -15,23 +16,8 @@ namespace detail {
 
 namespace fs = std::filesystem;
 
-std::string readFileBounded(const fs::path& file, std::uint64_t maxBytes) {
-    std::error_code error;
-    const auto status = fs::status(file, error);
-    if (error || !fs::exists(status)) throw InputError(file, "no such file");
-    if (!fs::is_regular_file(status)) throw InputError(file, "not a regular file");
-    const std::uint64_t size = fs::file_size(file, error);
-    if (error) throw InputError(file, "cannot read its size: " + error.message());
-    if (size > maxBytes)
-        throw InputError(file, "file of " + std::to_string(size) + " bytes exceeds the limit of " +
-                                   std::to_string(maxBytes));
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw InputError(file, "cannot open for reading");
-    std::string bytes(size, '\0');
-    in.read(bytes.data(), std::streamsize(size));
-    if (std::uint64_t(in.gcount()) != size) throw InputError(file, "short read (file changed while reading?)");
-    return bytes;
-}
+// The one reader of a given file (core/input_file.h): regular, bounded, whole.
+std::string readFileBounded(const fs::path& file, std::uint64_t maxBytes) { return readInputFile(file, maxBytes, "file"); }
 
 bool isContainedRegularFile(const fs::path& root, const fs::path& candidate) {
     std::error_code error;

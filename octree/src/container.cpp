@@ -2,6 +2,7 @@
 #include "container.h"
 
 #include <vtex/core/error.h>
+#include <vtex/core/input_file.h>
 #include <vtex/octree/volume.h>
 
 // Debian's libxxhash, compiled inline into this translation unit: the static vtex_octree then
@@ -178,16 +179,7 @@ FileCheck checkFile(std::string_view bytes, std::string_view magic, std::uint32_
 }
 
 std::string readFileBytes(const std::filesystem::path& file, std::uint64_t maxBytes) {
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(file, ec);
-    if (ec) throw InputError(file, "cannot read: " + ec.message());
-    if (size > maxBytes) throw InputError(file, "file of " + std::to_string(size) + " bytes is too large");
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw IoError(file, "cannot open for reading");
-    std::string bytes(size, '\0');
-    in.read(bytes.data(), std::streamsize(size));
-    if (std::uint64_t(in.gcount()) != size) throw IoError(file, "short read");
-    return bytes;
+    return readInputFile(file, maxBytes, "file");
 }
 
 }  // namespace vtex::octree

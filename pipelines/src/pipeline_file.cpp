@@ -2,6 +2,7 @@
 #include <vtex/pipelines/pipeline.h>
 
 #include <vtex/core/error.h>
+#include <vtex/core/input_file.h>
 #include <vtex/core/toml_reader.h>
 #include <vtex/render/scene.h>
 #include <vtex/sampler/patterns.h>
@@ -41,15 +42,12 @@ std::size_t sceneTexelIndex(const render::Scene& scene, const std::string& name)
 }
 
 Pipeline loadPipeline(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw InputError(file, "cannot open the pipeline file");
-    std::ostringstream text;
-    text << in.rdbuf();
+    const std::string text = readInputFile(file, std::uint64_t(64) << 20, "pipeline file");
 
     Pipeline pipeline;
     pipeline.file = file;
     TomlReader reader(file, pipeline.warnings);
-    const toml::table root = reader.parse(text.str());
+    const toml::table root = reader.parse(text);
     reader.checkKeys(root, "", {"pipeline", "source", "texel", "render", "compare"});
 
     pipeline.output = file.parent_path() / (file.stem().string() + "-out");

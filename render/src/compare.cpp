@@ -1,6 +1,7 @@
 #include <vtex/render/compare.h>
 
 #include <vtex/core/error.h>
+#include <vtex/core/input_file.h>
 
 #include <ImfChannelList.h>
 #include <ImfHeader.h>
@@ -183,6 +184,7 @@ Image errorHeatMap(const Image& a, const Image& b, double fullScale) {
 }
 
 std::vector<std::string> comparedChannels(const std::filesystem::path& exrFile) {
+    checkInputFile(exrFile, std::uint64_t(4) << 30, "EXR image");  // OpenEXR would hang on a FIFO
     std::vector<std::string> names;
     try {
         Imf::InputFile exr(exrFile.c_str());

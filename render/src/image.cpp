@@ -5,6 +5,7 @@
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
+#include <vtex/core/input_file.h>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -56,6 +57,9 @@ void writeExr(const Image& image, const std::filesystem::path& file) {
 }
 
 Image readExr(const std::filesystem::path& file) {
+    // OpenEXR opens the file by name: a FIFO would hang it (input_file.h). 4 GiB holds the
+    // largest image vtex writes (16384² RGBA float and two AOVs) with room to spare.
+    checkInputFile(file, std::uint64_t(4) << 30, "EXR image");
     try {
         Imf::InputFile exr(file.c_str());
         const Imath::Box2i window = exr.header().dataWindow();

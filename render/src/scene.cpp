@@ -3,6 +3,7 @@
 #include <vtex/render/scene.h>
 
 #include <vtex/core/error.h>
+#include <vtex/core/input_file.h>
 #include <vtex/core/toml_reader.h>
 
 #include <Eigen/Geometry>
@@ -156,16 +157,7 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
 }
 
 Scene loadScene(const std::filesystem::path& file) {
-    std::error_code ec;
-    if (!fs::is_regular_file(file, ec)) throw InputError(file, "no such scene file");
-    const auto size = fs::file_size(file, ec);
-    if (ec) throw IoError(file, "cannot read: " + ec.message());
-    if (size > (std::uintmax_t(64) << 20)) throw InputError(file, "scene file larger than 64 MiB");
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw IoError(file, "cannot open");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parseScene(text.str(), file);
+    return parseScene(readInputFile(file, std::uint64_t(64) << 20, "scene file"), file);
 }
 
 }  // namespace vtex::render

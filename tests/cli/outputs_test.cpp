@@ -91,3 +91,27 @@ TEST(Outputs, NoCommandReplacesADeviceAFifoADirectoryOrItsInput) {
         EXPECT_NE(name, "c.exr");
     }
 }
+
+// Inputs are regular files of bounded size (issue 14, item 3): a FIFO hung `vtex run` and
+// `vtex compare`, /dev/zero grew a pipeline past 3 GB, a directory ran as an empty pipeline.
+TEST(Inputs, AFifoADeviceOrADirectoryIsRefusedAsAnyInput) {
+    const Specials s = makeSpecials("inputs");
+    std::vector<fs::path> inputs = {s.fifo, s.folder};
+    if (s.haveDevice) inputs.push_back(s.device);
+    if (fs::exists("/dev/zero")) inputs.push_back("/dev/zero");
+    for (const fs::path& input : inputs) {
+        const std::string in = input.string(), out = (s.dir / "out.x").string();
+        for (const std::vector<std::string>& args : {std::vector<std::string>{"run", in, "-o", (s.dir / "run").string()},
+                                                     {"render", in, "-o", out},
+                                                     {"reference", in, "-o", out},
+                                                     {"compare", in, in},
+                                                     {"sample", in, "-o", out},
+                                                     {"build", in, "-o", out},
+                                                     {"ingest", in, "-o", out}}) {
+            const auto r = runVtex(args);
+            EXPECT_EQ(r.exitStatus, 3) << args[0] << " " << in << ": " << r.err;
+            EXPECT_NE(r.err.find(in), std::string::npos) << r.err;
+        }
+    }
+    EXPECT_FALSE(fs::exists(s.dir / "out.x"));
+}
