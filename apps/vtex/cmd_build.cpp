@@ -31,8 +31,9 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         ->capture_default_str()
         ->check(CLI::IsMember({"neyret", "sggx"}));
     app.add_option("--tolerance", flags->tolerance,
-                   "Drop children within this of their parent (density relative, ellipsoid and albedo "
-                   "absolute); 0 keeps only exactly constant regions")
+                   "Drop children a parent can stand for within this: the largest change of the transmittance "
+                   "along any chord of the parent (per unit tau), and of the ellipsoid's entries and the albedo; "
+                   "0 keeps only exactly constant regions")
         ->check(finiteNumber())
         ->capture_default_str()
         ->check(CLI::Range(0.0, 1e6));

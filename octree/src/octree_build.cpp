@@ -423,8 +423,16 @@ Octree OctreeBuilder::compress(Progress& progress) const {
                     }
                 }
                 if (!ok || !m.options.compress) continue;
-                const double dTol = eps * double(p.density);
-                ok = double(p.density) - double(r.dmin) <= dTol && double(r.dmax) - double(p.density) <= dTol;
+                // Transmittance: standing for its descendants, the node changes the extinction
+                // anywhere in its voxel by at most Δρ·Â, Â ≤ √(tr S) for every descendant's and
+                // its own normalised S, so the transmittance along any chord of its voxel
+                // (length ≤ √3·h) by at most Δρ·√(tr S_max)·√3·h (|e^−a − e^−b| ≤ |a − b|), for
+                // τ = 1. A missing child is density 0: a node merges with empty space when its own
+                // optical depth across itself is within ε.
+                const double dRho = std::max(double(p.density) - double(r.dmin), double(r.dmax) - double(p.density));
+                const double areaBound = std::sqrt(std::max({0.0, double(r.smax[0]) + double(r.smax[1]) + double(r.smax[2]),
+                                                             double(self.smax[0]) + double(self.smax[1]) + double(self.smax[2])}));
+                ok = dRho * areaBound * std::sqrt(3.0) * std::ldexp(1.0, -int(l)) <= eps;
                 for (int k = 0; k < 6 && ok; ++k)
                     ok = double(self.smin[k]) - double(r.smin[k]) <= eps &&
                          double(r.smax[k]) - double(self.smin[k]) <= eps;

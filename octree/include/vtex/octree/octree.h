@@ -5,8 +5,10 @@
 /// compression". Level ℓ has 2^ℓ voxels per side; level 0 is the whole texel.
 ///
 /// Compression: a stored node with no children (childMask 0) is a *leaf* and stands for all its
-/// descendants: every finest voxel below it is within the tolerance ε of it (density relative:
-/// |ρ − ρ_leaf| ≤ ε ρ_leaf; normalised S and albedo absolute, entrywise, for non-empty voxels).
+/// descendants, every finest voxel below it within the tolerance ε of it in what a render sees:
+/// the transmittance along any chord of the leaf's voxel changes by at most ε (per unit τ:
+/// max|ρ − ρ_leaf| · √(tr S_max) · √3 · 2^−ℓ ≤ ε, a missing child counting as density 0), and
+/// the normalised S and the albedo, on which the reflectance depends, by at most ε entrywise.
 /// An internal node's missing children are empty. An empty region is therefore represented
 /// once, by the cleared bit of its coarsest non-empty ancestor (or by an empty root).
 #pragma once
