@@ -57,6 +57,23 @@ fs::path manifestPath(const Stage& stage, const fs::path& root) {
     return root / (stage.kind + "s") / (stage.name + ".manifest.json");
 }
 
+// Two stages that would write one file (a compare `c` and one named `c.manifest` both wrote
+// compares/c.manifest.json, and the cache never settled): refused before anything runs, naming
+// both stages and the file.
+void refuseSharedOutputs(const std::vector<Stage>& stages, const fs::path& root, const fs::path& pipelineFile) {
+    std::map<fs::path, std::string> writer;
+    for (const Stage& stage : stages) {
+        std::vector<fs::path> files{manifestPath(stage, root)};
+        for (const auto& [role, file] : stage.outputs) files.push_back(file);
+        for (const fs::path& file : files) {
+            const std::string who = stage.kind + " '" + stage.name + "'";
+            const auto [it, fresh] = writer.emplace(file.lexically_normal(), who);
+            if (!fresh && it->second != who)
+                throw InputError(pipelineFile, it->second + " and " + who + " would both write " + file.string());
+        }
+    }
+}
+
 // True when the manifest's key matches and every output still has the recorded content.
 bool upToDate(Stage& stage, const fs::path& root) {
     const fs::path manifest = manifestPath(stage, root);
@@ -398,6 +415,8 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             return metrics;
         };
     }
+
+    refuseSharedOutputs(stages, root, pipeline.file);
 
     MemoryMonitor memory;
     // Run wave by wave; a wave is a run of stages of one kind.

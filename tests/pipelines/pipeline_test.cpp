@@ -401,3 +401,29 @@ TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {
 }
 
 }  // namespace
+
+// Two stages that would write one file are refused before anything runs (issue 14, item 5): a
+// compare `c` writes its manifest compares/c.manifest.json, which is the metrics file of a
+// compare named `c.manifest`.
+TEST(Pipeline, StagesThatWouldWriteOneFileAreRefusedBeforeAnythingRuns) {
+    const fs::path dir = makeProject("collide");
+    std::string pipeline = vtex::test::readText(dir / "pipeline.toml");
+    pipeline += "\n[[compare]]\nname = \"c\"\na = \"grass-hill\"\nb = \"cross-hill\"\n"
+                "\n[[compare]]\nname = \"c.manifest\"\na = \"grass-hill\"\nb = \"cross-hill\"\n";
+    writeText(dir / "pipeline.toml", pipeline);
+    try {
+        run(dir);
+        FAIL() << "the pipeline ran";
+    } catch (const vtex::InputError& e) {
+        const std::string message = e.what();
+        EXPECT_NE(message.find("compare 'c'"), std::string::npos) << message;
+        EXPECT_NE(message.find("compare 'c.manifest'"), std::string::npos) << message;
+        EXPECT_NE(message.find("c.manifest.json"), std::string::npos) << message;
+    }
+    // Nothing ran: no stage left a manifest.
+    if (fs::exists(dir / "out")) {
+        for (const auto& entry : fs::recursive_directory_iterator(dir / "out")) {
+            EXPECT_EQ(entry.path().string().find(".manifest.json"), std::string::npos) << entry.path();
+        }
+    }
+}
