@@ -3,6 +3,8 @@
 #include <vtex/core/atomic_file.h>
 #include <vtex/render/image.h>
 
+#include <optional>
+
 namespace vtex::cli {
 
 void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::string& aovHelp) {
@@ -27,9 +29,13 @@ render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& gl
 }
 
 void writeImageOutputs(const render::RenderResult& result, const ImageCommandArgs& args) {
-    render::writeExr(result.image, args.output);
-    if (!args.png.empty()) render::writePng(result.image, args.png);
-    if (!args.stats.empty()) render::writeStatsJson(result.stats, args.stats);
+    // All or none (commitAll): a full disk while writing the PNG leaves no EXR either.
+    AtomicOutputFile exr(args.output);
+    std::optional<AtomicOutputFile> png, stats;
+    render::writeExr(result.image, exr);
+    if (!args.png.empty()) render::writePng(result.image, png.emplace(args.png));
+    if (!args.stats.empty()) render::writeStatsJson(result.stats, stats.emplace(args.stats));
+    commitAll({&exr, png ? &*png : nullptr, stats ? &*stats : nullptr});
 }
 
 }  // namespace vtex::cli

@@ -102,8 +102,8 @@ std::ostream& AtomicOutputFile::stream() {
     return mStream;
 }
 
-void AtomicOutputFile::commit() {
-    if (mCommitted) return;
+void AtomicOutputFile::finish() {
+    if (mFinished) return;
     if (mStream.is_open()) {
         mStream.flush();
         const bool failed = !mStream;
@@ -111,6 +111,19 @@ void AtomicOutputFile::commit() {
         if (failed || mStream.fail()) throw IoError(mTarget, "write failed (disk full?)");
     }
     syncPath(mTemporary, false);
+    mFinished = true;
+}
+
+void commitAll(std::initializer_list<AtomicOutputFile*> files) {
+    for (AtomicOutputFile* file : files)
+        if (file) file->finish();
+    for (AtomicOutputFile* file : files)
+        if (file) file->commit();
+}
+
+void AtomicOutputFile::commit() {
+    if (mCommitted) return;
+    finish();
     if (::rename(mTemporary.c_str(), mTarget.c_str()) != 0)
         throw IoError(mTarget, "cannot move the finished file into place: " + systemError());
     mCommitted = true;

@@ -381,9 +381,13 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             const render::RenderResult result = step.renderer == "reference"
                                                     ? render::renderReference(boundScene(), referenceOptions(step), quiet)
                                                     : render::renderScene(boundScene(), renderOptions(step), quiet);
-            render::writeExr(result.image, self.outputs.at("image"));
-            render::writePng(result.image, self.outputs.at("preview"));
-            render::writeStatsJson(result.stats, self.outputs.at("stats"));
+            // The image, its preview and its stats all or none (commitAll).
+            AtomicOutputFile image(self.outputs.at("image")), preview(self.outputs.at("preview")),
+                stats(self.outputs.at("stats"));
+            render::writeExr(result.image, image);
+            render::writePng(result.image, preview);
+            render::writeStatsJson(result.stats, stats);
+            commitAll({&image, &preview, &stats});
             return Json::parse(readText(self.outputs.at("stats")));
         };
     }

@@ -28,6 +28,12 @@ Image::Image(int w, int h, bool aovs) : width(w), height(h) {
 
 void writeExr(const Image& image, const std::filesystem::path& file) {
     AtomicOutputFile out(file);
+    writeExr(image, out);
+    out.commit();
+}
+
+void writeExr(const Image& image, AtomicOutputFile& out) {
+    const std::filesystem::path& file = out.target();
     try {
         Imf::Header header(image.width, image.height);
         header.compression() = Imf::ZIP_COMPRESSION;
@@ -53,7 +59,6 @@ void writeExr(const Image& image, const std::filesystem::path& file) {
     } catch (const std::exception& e) {
         throw IoError(file, std::string("cannot write EXR: ") + e.what());
     }
-    out.commit();
 }
 
 Image readExr(const std::filesystem::path& file) {
@@ -99,6 +104,13 @@ double linearToSrgb(double x) {
 }
 
 void writePng(const Image& image, const std::filesystem::path& file) {
+    AtomicOutputFile out(file);
+    writePng(image, out);
+    out.commit();
+}
+
+void writePng(const Image& image, AtomicOutputFile& out) {
+    const std::filesystem::path& file = out.target();
     ingest::Image display;
     display.width = image.width;
     display.height = image.height;
@@ -117,7 +129,7 @@ void writePng(const Image& image, const std::filesystem::path& file) {
     } catch (const std::runtime_error& e) {
         throw IoError(file, std::string("cannot encode PNG: ") + e.what());
     }
-    writeFileAtomically(file, bytes);
+    out.stream().write(bytes.data(), std::streamsize(bytes.size()));
 }
 
 Image downsample2x(const Image& image) {

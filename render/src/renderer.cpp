@@ -341,6 +341,12 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
 }
 
 void writeStatsJson(const RenderStats& s, const std::filesystem::path& file) {
+    AtomicOutputFile out(file);
+    writeStatsJson(s, out);
+    out.commit();
+}
+
+void writeStatsJson(const RenderStats& s, AtomicOutputFile& out) {
     nlohmann::json j;
     j["renderer"] = s.renderer;
     j["wall_seconds"] = s.wallSeconds;
@@ -363,7 +369,8 @@ void writeStatsJson(const RenderStats& s, const std::filesystem::path& file) {
         j["approximations"] = s.approximations;
     }
     if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;
-    writeFileAtomically(file, j.dump(2) + "\n");
+    const std::string text = j.dump(2) + "\n";
+    out.stream().write(text.data(), std::streamsize(text.size()));
 }
 
 }  // namespace vtex::render

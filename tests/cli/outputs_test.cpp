@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <cstdlib>
 #include <iostream>
 
 #include <sys/stat.h>
@@ -114,4 +115,41 @@ TEST(Inputs, AFifoADeviceOrADirectoryIsRefusedAsAnyInput) {
         }
     }
     EXPECT_FALSE(fs::exists(s.dir / "out.x"));
+}
+
+// A command's outputs all or none (issue 14, item 6): when the PNG cannot be written, the EXR
+// written before it is not left behind either. The PNG's folder is a file here, which fails
+// as root too; where the test may mount a 64 KiB tmpfs, a full disk is tried as well.
+TEST(Outputs, ACommandWritesAllItsOutputsOrNone) {
+    const Specials s = makeSpecials("all_or_none");
+    const fs::path scene = s.dir / "scene.toml";
+    std::ofstream(s.dir / "plane.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    std::ofstream(scene) << "[camera]\nposition = [0.5, -2, 1.5]\nlook_at = [0.5, 0.5, 0]\nwidth = 64\nheight = 48\n"
+                            "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n"
+                            "[[surface]]\nmesh = \"plane.obj\"\n";
+    std::ofstream(s.dir / "not-a-folder") << "x";
+    const fs::path exr = s.dir / "y.exr";
+    const auto r = runVtex({"render", scene.string(), "-o", exr.string(), "--png", (s.dir / "not-a-folder" / "y.png").string(),
+                            "--stats", (s.dir / "y.json").string()});
+    EXPECT_NE(r.exitStatus, 0);
+    EXPECT_FALSE(fs::exists(exr)) << "the EXR was left without its PNG";
+    EXPECT_FALSE(fs::exists(s.dir / "y.json"));
+
+    const fs::path small = s.dir / "small";
+    fs::create_directories(small);
+    if (std::system(("mount -t tmpfs -o size=64k tmpfs " + small.string() + " 2>/dev/null").c_str()) != 0) {
+        std::cout << "no full-disk case: cannot mount a tmpfs here\n";
+        return;
+    }
+    // Fill it but for one 4 KiB page: the EXR (under 1 KiB, one page) fits, its PNG then not.
+    { std::ofstream(small / "filler", std::ios::binary) << std::string(60 * 1024, 'x'); }
+    const auto full = runVtex({"render", scene.string(), "-o", (small / "z.exr").string(), "--png", (small / "z.png").string()});
+    const bool both = fs::exists(small / "z.exr") && fs::exists(small / "z.png");
+    const bool none = !fs::exists(small / "z.exr") && !fs::exists(small / "z.png");
+    std::cout << "full disk: exit " << full.exitStatus << (both ? ", both written" : none ? ", none written" : ", one written")
+              << "\n";
+    EXPECT_TRUE(full.exitStatus == 0 ? both : none) << full.exitStatus << " " << full.err;
+    for (const auto& entry : fs::directory_iterator(small))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
+    EXPECT_EQ(std::system(("umount " + small.string()).c_str()), 0);
 }

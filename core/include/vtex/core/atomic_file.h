@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <string_view>
 #include <vector>
 
@@ -33,7 +34,11 @@ public:
     const std::filesystem::path& temporaryPath() const { return mTemporary; }
     const std::filesystem::path& target() const { return mTarget; }
 
-    /// Flushes to disk and renames the temporary over the target. Throws IoError.
+    /// Flushes the temporary to disk (a full disk shows here); nothing is renamed yet. Throws
+    /// IoError. Idempotent.
+    void finish();
+
+    /// finish(), then renames the temporary over the target. Throws IoError.
     void commit();
 
 private:
@@ -41,7 +46,13 @@ private:
     std::filesystem::path mTemporary;
     std::ofstream mStream;
     bool mCommitted = false;
+    bool mFinished = false;
 };
+
+/// A command's outputs all or none: finishes every file (so that a full disk or a failed write
+/// fails before any target is replaced), then renames them one after the other. Only a rename
+/// failing between two others (the directory removed meanwhile) can leave some in place.
+void commitAll(std::initializer_list<AtomicOutputFile*> files);
 
 /// Refuses (vtex::InputError naming `target`) an output path that exists and is not a regular
 /// file once links are followed — a directory, a FIFO, a device, a socket: the rename of an

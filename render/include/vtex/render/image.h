@@ -9,6 +9,10 @@
 #include <filesystem>
 #include <vector>
 
+namespace vtex {
+class AtomicOutputFile;
+}
+
 namespace vtex::render {
 
 /// Row-major images, row 0 at the top.
@@ -28,11 +32,14 @@ struct Image {
 /// Writes R, G, B, A (32-bit float, ZIP) and, when present, the AOV channels "Z" (depth) and
 /// "level". Throws vtex::IoError.
 void writeExr(const Image& image, const std::filesystem::path& file);
+/// The same into an output the caller commits (commitAll: several outputs all or none).
+void writeExr(const Image& image, AtomicOutputFile& out);
 /// Reads an EXR written by writeExr (or any RGBA EXR; missing channels read as 0, A as 1).
 /// Throws vtex::InputError.
 Image readExr(const std::filesystem::path& file);
 /// Writes an 8-bit sRGB PNG with alpha, colours clamped to [0,1]. Throws vtex::IoError.
 void writePng(const Image& image, const std::filesystem::path& file);
+void writePng(const Image& image, AtomicOutputFile& out);
 
 /// Linear → sRGB transfer function on [0,1].
 double linearToSrgb(double linear);

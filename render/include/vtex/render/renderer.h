@@ -18,6 +18,10 @@
 #include <string>
 #include <vector>
 
+namespace vtex {
+class AtomicOutputFile;
+}
+
 namespace vtex::render {
 
 /// How a voxel's micro-primitive reflects light (octree/reflectance.h).
@@ -135,5 +139,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
 
 /// stats.json: wall time, threads, rays, voxels visited, level histogram, mean level.
 void writeStatsJson(const RenderStats& stats, const std::filesystem::path& file);
+/// The same into an output the caller commits (AtomicOutputFile, commitAll).
+void writeStatsJson(const RenderStats& stats, AtomicOutputFile& out);
 
 }  // namespace vtex::render
