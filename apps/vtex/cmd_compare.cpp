@@ -100,6 +100,10 @@ const bool registered = registerCommand(60, [](CLI::App& app) -> Action {
             throw InputError(o->b, "size " + std::to_string(b.width) + "x" + std::to_string(b.height) +
                                        " differs from " + o->a + " (" + std::to_string(a.width) + "x" +
                                        std::to_string(a.height) + ")");
+        for (const auto& [image, file] : {std::pair{&a, o->a}, std::pair{&b, o->b}})
+            if (const auto p = render::firstUnmeasurablePixel(*image))
+                throw InputError(file, "pixel (" + std::to_string(p->first) + ", " + std::to_string(p->second) +
+                                           ") is not finite or beyond ±1e30: such an image has no error to measure");
         const render::ImageComparison c = render::compareImages(a, b);
         if (!o->diff.empty()) render::writePng(render::errorHeatMap(a, b, c.worstError), o->diff);
         if (o->json)

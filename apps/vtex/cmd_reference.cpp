@@ -54,6 +54,7 @@ const bool registered = registerCommand(45, [](CLI::App& app) -> Action {
         TerminalProgress progress(global);
         const render::RenderResult result = render::renderReference(scene, options, progress);
         writeImageOutputs(result, *a);
+        printRenderWarnings(result, scene, global);
         std::ostringstream line;
         line << "rendered the " << a->mode << " reference " << result.image.width << "x" << result.image.height << " at "
              << result.stats.spp << " spp in " << result.stats.wallSeconds << " s on " << result.stats.threads << " threads ("

@@ -65,6 +65,7 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         TerminalProgress progress(global);
         const render::RenderResult result = render::renderScene(scene, options, progress);
         writeImageOutputs(result, *a);
+        printRenderWarnings(result, scene, global);
         std::ostringstream line;
         line << "rendered " << result.image.width << "x" << result.image.height << " in " << result.stats.wallSeconds
              << " s on " << result.stats.threads << " threads (" << result.stats.primaryRays << " camera rays, "

@@ -28,6 +28,10 @@ render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& gl
     return scene;
 }
 
+void printRenderWarnings(const render::RenderResult& result, const render::Scene& scene, const GlobalOptions& global) {
+    for (std::size_t i = scene.warnings.size(); i < result.warnings.size(); ++i) warning(global, result.warnings[i]);
+}
+
 void writeImageOutputs(const render::RenderResult& result, const ImageCommandArgs& args) {
     // All or none (commitAll): a full disk while writing the PNG leaves no EXR either.
     AtomicOutputFile exr(args.output);

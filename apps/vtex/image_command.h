@@ -26,6 +26,9 @@ struct ImageCommandArgs {
 void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::string& aovHelp);
 /// The scene, its warnings printed.
 render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global);
+/// The render's own warnings (those past the scene's, which loadSceneFor printed): clamped
+/// pixels, for one.
+void printRenderWarnings(const render::RenderResult& result, const render::Scene& scene, const GlobalOptions& global);
 /// The EXR, then the PNG and stats.json when asked for.
 void writeImageOutputs(const render::RenderResult& result, const ImageCommandArgs& args);
 

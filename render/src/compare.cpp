@@ -135,8 +135,16 @@ void splitByScale(const Image& a, const Image& b, ImageComparison& result) {
 
 }  // namespace
 
+std::optional<std::pair<int, int>> firstUnmeasurablePixel(const Image& image) {
+    for (std::size_t i = 0; i < image.rgba.size(); ++i)
+        if (i % 4 != 3 && !(std::abs(image.rgba[i]) < 1e30f))
+            return std::pair{int(i / 4 % std::size_t(image.width)), int(i / 4 / std::size_t(image.width))};
+    return std::nullopt;
+}
+
 ImageComparison compareImages(const Image& a, const Image& b) {
     requireSameSize(a, b);
+    if (firstUnmeasurablePixel(a) || firstUnmeasurablePixel(b)) throw std::invalid_argument("an image has a pixel that is not finite");
     ImageComparison result;
     result.width = a.width;
     result.height = a.height;

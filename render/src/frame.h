@@ -72,10 +72,12 @@ private:
 
 struct Counters {
     std::uint64_t primary = 0, shadow = 0, segments = 0, voxels = 0, reflectance = 0;
+    std::uint64_t clamped = 0;  ///< pixel channels beyond float's range (or NaN), clamped when stored
     double mesh = 0;  ///< the hybrid's mesh shares of camera-ray segments, summed
     std::vector<double> histogram;
     void add(const Counters& o) {
         mesh += o.mesh;
+        clamped += o.clamped;
         primary += o.primary;
         shadow += o.shadow;
         segments += o.segments;
@@ -85,6 +87,13 @@ struct Counters {
         for (std::size_t i = 0; i < o.histogram.size(); ++i) histogram[i] += o.histogram[i];
     }
 };
+
+/// Pixel channels clamped when stored (storedRadiance), over all tiles.
+inline std::uint64_t clampedChannels(const std::vector<Counters>& tiles) {
+    std::uint64_t n = 0;
+    for (const Counters& c : tiles) n += c.clamped;
+    return n;
+}
 
 /// The statistics every render reports, from the counters summed over the tiles.
 RenderStats summarize(const std::vector<Counters>& tileCounters, const SceneGeometry& geometry, int threads,
@@ -215,6 +224,22 @@ struct PixelValue {
     double level = -1;   ///< AOV; −1 where no texel was seen
 };
 
+/// A radiance as the image stores it: radiance that overflows float (a light of colour 1e308)
+/// is clamped to the largest float and NaN to 0, each counted, so that no image holds inf or
+/// NaN (the renderers then warn; docs/render.md, "Output").
+inline float storedRadiance(double radiance, Counters& counters) {
+    constexpr double kLargest = double(std::numeric_limits<float>::max());
+    if (std::isnan(radiance)) {
+        ++counters.clamped;
+        return 0.0f;
+    }
+    if (std::abs(radiance) > kLargest) {
+        ++counters.clamped;
+        return float(std::copysign(kLargest, radiance));
+    }
+    return float(radiance);
+}
+
 /// Renders every pixel with `pixel(x, y, counters)` in 16×16 tiles on `threads` TBB workers
 /// (the pixel value does not depend on which thread computes it), with progress per tile.
 template <class PixelFunction>
@@ -237,7 +262,7 @@ void renderTiles(Image& image, int threads, Progress& progress, std::vector<Coun
                     for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
                         const PixelValue value = pixel(x, y, counters);
                         const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
-                        for (int c = 0; c < 3; ++c) image.rgba[4 * i + std::size_t(c)] = float(value.radiance[c]);
+                        for (int c = 0; c < 3; ++c) image.rgba[4 * i + std::size_t(c)] = storedRadiance(value.radiance[c], counters);
                         image.rgba[4 * i + 3] = float(value.alpha);
                         if (image.hasAovs()) {
                             image.depth[i] = float(value.depth);

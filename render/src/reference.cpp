@@ -265,6 +265,10 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     result.stats.referenceTriangles = deformedMode ? deformed->triangleCount() : sourceTriangles;
     result.image = std::move(image);
     result.warnings = scene.warnings;
+    if (const std::uint64_t clamped = detail::clampedChannels(tileCounters))
+        result.warnings.push_back(std::to_string(clamped) +
+                                  " pixel channels overflowed (or were NaN) and were clamped to float's range: "
+                                  "check the lights' colours and the materials");
     return result;
 }
 

@@ -337,6 +337,10 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
     result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
     result.image = std::move(image);
     result.warnings = scene.warnings;
+    if (const std::uint64_t clamped = detail::clampedChannels(tileCounters))
+        result.warnings.push_back(std::to_string(clamped) +
+                                  " pixel channels overflowed (or were NaN) and were clamped to float's range: "
+                                  "check the lights' colours and the materials");
     return result;
 }
 

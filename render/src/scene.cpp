@@ -17,6 +17,19 @@
 namespace vtex::render {
 namespace {
 
+// Bounds that keep every radiance a render can make within float's range, so that no image
+// holds inf: at most 1e9 (light) × 1e6 (material) × (1e6 + 2)/2π (Phong's normalisation at the
+// largest shininess) ≈ 1.6e20, far below 3.4e38. A light of colour 1e308 wrote inf pixels with
+// exit 0 (issue 14, item 7).
+constexpr double kMaxLightColor = 1e9;
+constexpr double kMaxMaterial = 1e6;
+
+std::string shortNumber(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
 namespace fs = std::filesystem;
 
 // The scene's own value kinds on top of the shared checked TOML reader.
@@ -27,7 +40,7 @@ public:
     template <int N>
     Eigen::Matrix<double, N, 1> vector(const toml::table& table, const std::string& path, std::string_view name,
                                        std::optional<Eigen::Matrix<double, N, 1>> fallback,
-                                       double min = -INFINITY) const {
+                                       double min = -INFINITY, double max = INFINITY) const {
         const std::string key = join(path, name);
         const toml::node* node = table.get(name);
         if (!node) {
@@ -41,6 +54,7 @@ public:
         for (int i = 0; i < N; ++i) {
             out[i] = number(*array->get(std::size_t(i)), key);
             if (out[i] < min) fail(key, "components must be ≥ " + std::to_string(min));
+            if (out[i] > max) fail(key, "components must be ≤ " + shortNumber(max));
         }
         return out;
     }
@@ -51,9 +65,9 @@ public:
         const std::string p = join(path, "material");
         checkKeys(*t, p, {"ambient", "diffuse", "specular", "shininess"});
         Material m;
-        m.ambient = vector<3>(*t, p, "ambient", defaults.ambient, 0.0);
-        m.diffuse = vector<3>(*t, p, "diffuse", defaults.diffuse, 0.0);
-        m.specular = vector<3>(*t, p, "specular", defaults.specular, 0.0);
+        m.ambient = vector<3>(*t, p, "ambient", defaults.ambient, 0.0, kMaxMaterial);
+        m.diffuse = vector<3>(*t, p, "diffuse", defaults.diffuse, 0.0, kMaxMaterial);
+        m.specular = vector<3>(*t, p, "specular", defaults.specular, 0.0, kMaxMaterial);
         m.shininess = number(*t, p, "shininess", defaults.shininess, 0, 1e6);
         return m;
     }
@@ -91,7 +105,7 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
         r.checkKeys(t, p, {"type", "direction", "position", "color"});
         Light light;
         const std::string type = r.string(t, p, "type", std::nullopt);
-        light.color = r.vector<3>(t, p, "color", Color(1, 1, 1), 0.0);
+        light.color = r.vector<3>(t, p, "color", Color(1, 1, 1), 0.0, kMaxLightColor);
         if (type == "directional") {
             light.type = LightType::Directional;
             const Eigen::Vector3d d = r.vector<3>(t, p, "direction", std::nullopt);

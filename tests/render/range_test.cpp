@@ -3,6 +3,7 @@
 #include "fixtures.h"
 
 #include <vtex/core/error.h>
+#include <vtex/render/compare.h>
 #include <vtex/render/reference.h>
 
 #include <gtest/gtest.h>
@@ -71,4 +72,36 @@ TEST(Range, AMeshOrShellBeyondTheExactRangeIsRefusedNamingTheMesh) {
     scene.surfaces.back().mesh = "tall.obj";
     vtex::NullProgress progress;
     EXPECT_NE(refusal([&] { renderScene(scene, {}, progress); }).find("tall.obj"), std::string::npos);
+}
+
+// Radiance never leaves float's range (issue 14, item 7): a light or a material past its bound
+// is refused naming the key (a light of 1e308 wrote inf pixels with exit 0), a pixel that would
+// still overflow is clamped and counted, and `vtex compare` refuses an image it cannot measure.
+TEST(Range, RadianceBeyondFloatIsRefusedOrClampedNeverWritten) {
+    const std::string light = "[camera]\nposition = [0, -3, 2]\nlook_at = [0, 0, 0]\n"
+                              "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\ncolor = [1e308, 1, 1]\n"
+                              "[[surface]]\nmesh = \"plane.obj\"\n";
+    try {
+        parseScene(light, "hot.toml");
+        FAIL() << "accepted";
+    } catch (const vtex::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("light[0].color"), std::string::npos) << e.what();
+    }
+    const std::string material = "[camera]\nposition = [0, -3, 2]\nlook_at = [0, 0, 0]\n"
+                                 "[[surface]]\nmesh = \"plane.obj\"\nmaterial = { specular = [1e300, 0, 0] }\n";
+    try {
+        parseScene(material, "shiny.toml");
+        FAIL() << "accepted";
+    } catch (const vtex::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("material.specular"), std::string::npos) << e.what();
+    }
+    // A scene built in memory skips the file's bounds: its pixels are clamped, counted and warned.
+    Scene scene = plainScene();
+    scene.lights[0].color = Color(1e300, 1e300, 1e300);
+    const RenderResult r = renderQuiet(scene);
+    for (float v : r.image.rgba) EXPECT_TRUE(std::isfinite(v));
+    ASSERT_FALSE(r.warnings.empty());
+    EXPECT_NE(r.warnings.back().find("clamped"), std::string::npos) << r.warnings.back();
+    EXPECT_TRUE(firstUnmeasurablePixel(r.image).has_value());
+    EXPECT_FALSE(firstUnmeasurablePixel(renderQuiet(plainScene()).image).has_value());
 }

@@ -21,7 +21,9 @@
 #include <array>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vtex::render {
@@ -42,7 +44,13 @@ struct ImageComparison {
     double rmsePixel = 0;                                       ///< RMSE of the residuals below 4×4
 };
 
-/// Compares two images of equal size. Throws std::invalid_argument when the sizes differ.
+/// The first pixel (x, y) with a colour channel that is not finite or is beyond ±1e30, if any:
+/// such an image has no RMSE (inf prints as null) and its SSIM overflows (its squares reach
+/// float's range); callers refuse it naming the file.
+std::optional<std::pair<int, int>> firstUnmeasurablePixel(const Image& image);
+
+/// Compares two images of equal size. Throws std::invalid_argument when the sizes differ or a
+/// colour channel is not finite.
 ImageComparison compareImages(const Image& a, const Image& b);
 
 /// Per-pixel RMS error over R, G, B mapped to a black–red–yellow–white ramp, full scale at
