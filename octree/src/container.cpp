@@ -140,6 +140,16 @@ std::vector<InSection> readContainer(std::string_view bytes, std::string_view ma
     return sections;
 }
 
+void requireKnownSections(const std::vector<InSection>& sections, const std::function<bool(std::string_view)>& known,
+                          const std::filesystem::path& file) {
+    for (std::size_t i = 0; i < sections.size(); ++i) {
+        const std::string where = sectionLocation(printableTag(sections[i].tag));
+        if (!known(sections[i].tag)) throw InputError(file, "unknown section", where);
+        for (std::size_t j = 0; j < i; ++j)
+            if (sections[j].tag == sections[i].tag) throw InputError(file, "duplicate section", where);
+    }
+}
+
 std::string_view requireSection(const std::vector<InSection>& sections, std::string_view tag,
                                 const std::filesystem::path& file) {
     for (const auto& section : sections)

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -119,6 +120,11 @@ void writeVoxelData(ByteWriter& w, const VoxelData& d);
 VoxelData readVoxelData(ByteReader& r);
 /// A problem with a parsed voxel (non-finite, negative, empty when not allowed), or empty.
 std::string checkVoxelData(const VoxelData& d, bool allowEmpty);
+
+/// Refuses a container with a section `known` does not accept, or one tag twice (the readers
+/// take the first of each tag they ask for: a second HEAD would be silently ignored).
+void requireKnownSections(const std::vector<InSection>& sections, const std::function<bool(std::string_view)>& known,
+                          const std::filesystem::path& file);
 void writeVolumeInfo(ByteWriter& w, const VolumeInfo& info);
 VolumeInfo readVolumeInfo(ByteReader& r, const std::filesystem::path& file, std::string_view tag);
 

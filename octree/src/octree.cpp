@@ -6,6 +6,7 @@
 #include <vtex/octree/octree.h>
 
 #include <bit>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -125,6 +126,14 @@ std::string serializeVto(const Octree& octree) {
 Octree parseVto(std::string_view bytes, const std::filesystem::path& file) {
     using namespace detail;
     const auto sections = readContainer(bytes, kVtoMagic, kVtoVersion, file);
+    requireKnownSections(
+        sections,
+        [](std::string_view tag) {
+            return tag == "HEAD" || tag == "STAT" ||
+                   (tag.size() == 4 && tag.substr(0, 2) == "LV" && std::isdigit(static_cast<unsigned char>(tag[2])) &&
+                    std::isdigit(static_cast<unsigned char>(tag[3])));
+        },
+        file);
     Octree tree;
     {
         ByteReader head(requireSection(sections, "HEAD", file));

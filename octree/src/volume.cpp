@@ -45,13 +45,23 @@ VoxelData readVoxelData(ByteReader& r) {
     return d;
 }
 
-// Validates one stored voxel: finite, non-negative density. Returns a problem or empty.
+// Validates one stored voxel's values, not only its checksum (issue 14, item 8): finite,
+// non-negative density; for a non-empty voxel a unit quaternion (to 1e-3: the format stores it
+// normalised in float), σ non-negative and not all zero (S would vanish), and an albedo in
+// [0, 1] (a glTF base colour is, and filtering averages it). Returns a problem or empty.
 std::string checkVoxelData(const VoxelData& d, bool allowEmpty) {
     if (!allFinite(d)) return "non-finite value";
     if (d.density < 0) return "negative density";
     if (!allowEmpty && d.density == 0) return "empty voxel stored";
     for (float v : d.sigma)
         if (v < 0) return "negative sigma";
+    if (d.density == 0) return {};
+    double norm = 0;
+    for (float v : d.rotation) norm += double(v) * double(v);
+    if (std::abs(std::sqrt(norm) - 1) > 1e-3) return "rotation is not a unit quaternion";
+    if (!(d.sigma[0] > 0 || d.sigma[1] > 0 || d.sigma[2] > 0)) return "all sigma are zero";
+    for (float v : d.albedo)
+        if (v < 0 || v > 1.001f) return "albedo outside [0, 1]";
     return {};
 }
 
@@ -128,6 +138,7 @@ std::string serializeVtl(const SparseVolume& volume) {
 SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file) {
     using namespace detail;
     const auto sections = readContainer(bytes, kVtlMagic, kVtlVersion, file);
+    requireKnownSections(sections, [](std::string_view tag) { return tag == "HEAD" || tag == "VOXL"; }, file);
     SparseVolume volume;
     ByteReader head(requireSection(sections, "HEAD", file));
     volume.info = readVolumeInfo(head, file, "HEAD");

@@ -3,6 +3,8 @@
 #include <vtex/core/error.h>
 #include <vtex/octree/octree.h>
 
+#include "../../octree/src/container.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -140,4 +142,47 @@ TEST(VtoFormat, ConsistentButWrongContentIsRefused) {
 }
 
 }  // namespace
+}  // namespace vtex::octree
+
+namespace vtex::octree {
+namespace {
+
+std::string refusal(std::string_view bytes) {
+    try {
+        parseVtl(bytes, "bad.vtl");
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+}  // namespace
+
+// Checksummed but wrong content (issue 14, item 8): values are validated, not only checksums,
+// and a container holds each of its own sections once and nothing else.
+TEST(VtlFormat, ValuesAndSectionsAreValidatedNotOnlyChecksums) {
+    const SparseVolume good = smallVolume();
+    EXPECT_EQ(refusal(serializeVtl(good)), "");
+    const auto withFirst = [&](auto&& change) {
+        SparseVolume v = good;
+        change(v.blocks.front().data);
+        return refusal(serializeVtl(v));  // serialised with valid checksums
+    };
+    EXPECT_NE(withFirst([](VoxelData& d) { d.rotation = {0, 0, 0, 0}; }).find("unit quaternion"), std::string::npos);
+    EXPECT_NE(withFirst([](VoxelData& d) { d.sigma = {0, 0, 0}; }).find("sigma"), std::string::npos);
+    EXPECT_NE(withFirst([](VoxelData& d) { d.albedo[1] = -0.5f; }).find("albedo"), std::string::npos);
+    EXPECT_NE(withFirst([](VoxelData& d) { d.albedo[2] = 3e38f; }).find("albedo"), std::string::npos);
+    // A second HEAD, and a section no reader knows, both with valid checksums.
+    const std::string bytes = serializeVtl(good);
+    const auto sections = detail::readContainer(bytes, "VTEX.VTL", kVtlVersion, "good.vtl");
+    std::vector<detail::OutSection> out;
+    for (const auto& s : sections) out.push_back({s.tag, std::string(s.payload)});
+    auto twice = out;
+    twice.push_back(out.front());
+    EXPECT_NE(refusal(detail::writeContainer("VTEX.VTL", kVtlVersion, twice)).find("duplicate section"), std::string::npos);
+    auto unknown = out;
+    unknown.push_back({"XTRA", "hello"});
+    EXPECT_NE(refusal(detail::writeContainer("VTEX.VTL", kVtlVersion, unknown)).find("unknown section"), std::string::npos);
+}
+
 }  // namespace vtex::octree
