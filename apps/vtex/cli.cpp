@@ -38,6 +38,12 @@ const Inspector* findInspector(const std::string& extension) {
     return found == registry.end() ? nullptr : &found->second;
 }
 
+std::uint64_t defaultMemoryLimit() {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), size = ::sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || size <= 0) return 0;  // unknown: no limit
+    return std::uint64_t(pages) * std::uint64_t(size) / 2;
+}
+
 CLI::Validator finiteNumber() {
     return CLI::Validator(
         [](std::string& text) -> std::string {

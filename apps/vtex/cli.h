@@ -57,6 +57,11 @@ const Inspector* findInspector(const std::string& extension);
 /// and an infinite or NaN flag would reach the stages as a value. Checked before any range.
 CLI::Validator finiteNumber();
 
+/// The memory a command may plan for when its user sets no --max-memory: half of this machine's
+/// physical memory (sysconf), so that a resolution or image too large for it is refused at once
+/// with its estimate instead of running into the kernel's OOM killer.
+std::uint64_t defaultMemoryLimit();
+
 /// Accepts a power of two from 1 to `largest` (voxel resolutions).
 CLI::Validator powerOfTwo(unsigned long long largest);
 

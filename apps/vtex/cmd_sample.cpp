@@ -26,7 +26,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         std::string solid = "auto";
         std::string bounds = "auto";
         double solidDensity = 0;
-        std::uint64_t maxMemory = 0;
+        std::uint64_t maxMemory = defaultMemoryLimit();
     };
     auto flags = std::make_shared<Flags>();
     app.add_option("MESH", flags->input, "Source mesh (.glb, or anything `vtex ingest` reads)")->required();
@@ -46,7 +46,8 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         ->capture_default_str()
         ->check(CLI::IsMember({"auto", "unit", "fit"}));
     app.add_option("--max-memory", flags->maxMemory,
-                   "Refuse before starting if the estimated footprint exceeds this (e.g. 4GiB, 512MB)")
+                   "Refuse before starting if the estimated footprint exceeds this (e.g. 4GiB, 512MB; "
+                   "default half of this machine's memory; 0: no limit)")
         ->transform(CLI::AsSizeValue(false));
     return [flags](const GlobalOptions& global) {
         checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
@@ -78,7 +79,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         try {
             volume = sampler::sampleMesh(mesh, options, progress);
         } catch (const sampler::MemoryLimitError& e) {
-            throw std::runtime_error(std::string("--max-memory: ") + e.what());
+            throw InputError(flags->input, std::string(e.what()) + " (--max-memory; by default half of this machine's memory)");
         }
         octree::writeVtl(volume, flags->output);
         std::uint64_t surface = 0, solid = 0;
