@@ -81,20 +81,10 @@ TEST(Range, RadianceBeyondFloatIsRefusedOrClampedNeverWritten) {
     const std::string light = "[camera]\nposition = [0, -3, 2]\nlook_at = [0, 0, 0]\n"
                               "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\ncolor = [1e308, 1, 1]\n"
                               "[[surface]]\nmesh = \"plane.obj\"\n";
-    try {
-        parseScene(light, "hot.toml");
-        FAIL() << "accepted";
-    } catch (const vtex::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("light[0].color"), std::string::npos) << e.what();
-    }
+    EXPECT_NE(refusal([&] { parseScene(light, "hot.toml"); }).find("light[0].color"), std::string::npos);
     const std::string material = "[camera]\nposition = [0, -3, 2]\nlook_at = [0, 0, 0]\n"
                                  "[[surface]]\nmesh = \"plane.obj\"\nmaterial = { specular = [1e300, 0, 0] }\n";
-    try {
-        parseScene(material, "shiny.toml");
-        FAIL() << "accepted";
-    } catch (const vtex::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("material.specular"), std::string::npos) << e.what();
-    }
+    EXPECT_NE(refusal([&] { parseScene(material, "shiny.toml"); }).find("material.specular"), std::string::npos);
     // A scene built in memory skips the file's bounds: its pixels are clamped, counted and warned.
     Scene scene = plainScene();
     scene.lights[0].color = Color(1e300, 1e300, 1e300);
