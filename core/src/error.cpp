@@ -7,10 +7,24 @@ std::string joinMessage(const std::filesystem::path& file, const std::string& lo
     std::string message = file.string();
     if (!location.empty()) message += ": " + location;
     message += ": " + problem;
-    // One line, whatever the problem text carries (it may quote untrusted input).
-    for (char& c : message)
-        if (c == '\n' || c == '\r') c = ' ';
-    return message;
+    // One line, whatever the problem text carries (it may quote untrusted input), and all of it:
+    // a NUL (a scene path may hold one) would end the message where what() is printed, other
+    // control characters would garble the terminal; they are written as \xHH.
+    std::string clean;
+    clean.reserve(message.size());
+    for (const char c : message) {
+        if (c == '\n' || c == '\r' || c == '\t') {
+            clean += ' ';
+        } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+            static constexpr char kHex[] = "0123456789abcdef";
+            clean += "\\x";
+            clean += kHex[(static_cast<unsigned char>(c) >> 4) & 15];
+            clean += kHex[static_cast<unsigned char>(c) & 15];
+        } else {
+            clean += c;
+        }
+    }
+    return clean;
 }
 }  // namespace
 

@@ -15,3 +15,13 @@ TEST(InputError, MessageIsOneLineEvenWhenTheProblemQuotesNewlines) {
     InputError error("a.obj", "bad token 'v 1\n2\r3'");
     EXPECT_EQ(std::string(error.what()).find_first_of("\r\n"), std::string::npos);
 }
+
+// A NUL in a path (a scene may name one) cut the message at it (issue 14, item 7); control
+// characters are written as \xHH, so the whole message reaches the terminal on one line.
+TEST(InputError, AControlCharacterOrNulDoesNotCutTheMessage) {
+    const std::string path = std::string("scenes/a") + '\0' + "b.obj";
+    InputError error(path, "no such file", "surface[0].mesh");
+    const std::string message = error.what();
+    EXPECT_EQ(message, "scenes/a\\x00b.obj: surface[0].mesh: no such file");
+    EXPECT_EQ(std::string(InputError("x", std::string("bell\a") + "\x1b[31m").what()), "x: bell\\x07\\x1b[31m");
+}
