@@ -5,6 +5,8 @@
 
 #include "footprint.h"
 
+#include <Eigen/LU>
+
 #include <string>
 
 namespace vtex::render::detail {
@@ -67,6 +69,29 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
     geometry.faces = prims.size();
     geometry.tracer = std::make_unique<Tracer>(std::move(prims));
     return geometry;
+}
+
+Mat3 tiledJacobian(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
+    Mat3 j = cell.jacobian(r);
+    j.col(0) /= s.repeatU;
+    j.col(1) /= s.repeatV;
+    return j;
+}
+
+double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
+    return localScale(cell, r, s.repeatU, s.repeatV);
+}
+
+SourcePoint sourcePoint(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const Vec3& referenceNormal,
+                        const Vec3& d) {
+    SourcePoint p;
+    p.cell = Vec3(rt.x() / surface.repeatU, rt.y() / surface.repeatV, rt.z());
+    p.world = prim.cell.map(p.cell);
+    const Vec3 n = tiledJacobian(prim.cell, p.cell, surface).inverse().transpose() * referenceNormal;
+    const double length = n.norm();
+    p.normal = length > 0 && std::isfinite(length) ? Vec3(n / length) : Vec3(-d);
+    p.scale = localScale(prim.cell, p.cell, surface);
+    return p;
 }
 
 std::pair<int, int> imageSize(const Scene& scene, int width, int height) {

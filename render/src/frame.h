@@ -99,6 +99,27 @@ inline std::uint64_t clampedChannels(const std::vector<Counters>& tiles) {
 RenderStats summarize(const std::vector<Counters>& tileCounters, const SceneGeometry& geometry, int threads,
                       int width, int height, int spp, double wallSeconds, double loadSeconds);
 
+/// Tiled reference coordinates of cell coordinates r on surface s: x and y times its repeat.
+inline Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
+
+/// The Jacobian at cell coordinates r of the map from tiled reference space to the world:
+/// the cell's, its first two columns divided by the surface's repeat.
+Mat3 tiledJacobian(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s);
+
+/// World length per unit of tiled reference space around cell coordinates r (footprint.h).
+double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s);
+
+/// A hit on a texel's source mesh at tiled reference coordinates `rt` as both renderers shade
+/// it: its cell coordinates, world point, unit world normal (the triangle's reference normal
+/// through the inverse transpose of the tiled map's Jacobian; −d where that is undefined) and
+/// the local scale for lifting shadow rays off it.
+struct SourcePoint {
+    Vec3 cell, world, normal;
+    double scale = 1;
+};
+SourcePoint sourcePoint(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const Vec3& referenceNormal,
+                        const Vec3& d);
+
 inline Vec3 bilerp(const std::array<Vec3, 4>& p, double u, double v) {
     const Vec3 a = p[0] + u * (p[1] - p[0]);
     const Vec3 b = p[2] + u * (p[3] - p[2]);

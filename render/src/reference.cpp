@@ -27,11 +27,8 @@ using detail::Counters;
 using detail::Hit;
 using detail::Prim;
 using detail::SurfaceRuntime;
+using detail::tile;
 
-// Shadow rays skip this much reference space (1e-5 of the unit cube, under a hundredth of a
-// voxel at 1024³) from where they leave a source triangle: far above the float rounding of the
-// source BVH, far below any feature the sampler can resolve.
-constexpr double kSelfIntersectionGap = 1e-5;
 
 /// Uniform pseudo-random numbers for the reference renderer's jittered samples: a pure
 /// function of (pixel, sample, dimension), so images do not depend on the thread count.
@@ -124,10 +121,10 @@ private:
         return detail::walkShadowRay(
             mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, 0,
             [&](const Prim&, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint, double) {
-                const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
-                const double length = (p1 - p0).norm();
-                const double sMin = startsAtHint ? (length > 0 ? kSelfIntersectionGap / length : 1.0) : 0.0;
-                return mSources[std::size_t(surface.texel)].bvh->occluded(p0, p1, sMin) ? 0.0 : 1.0;
+                return mSources[std::size_t(surface.texel)].bvh->occludedLeaving(tile(rIn, surface), tile(rOut, surface),
+                                                                                 startsAtHint)
+                           ? 0.0
+                           : 1.0;
             });
     }
 
@@ -167,24 +164,15 @@ private:
     // through the inverse transpose of the tiled map's Jacobian there.
     Color shadeSource(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const detail::SourceHit& hit,
                       const Vec3& d, Counters& counters) const {
-        const Vec3 rc(rt.x() / surface.repeatU, rt.y() / surface.repeatV, rt.z());
-        const Vec3 x = prim.cell.map(rc);
-        Mat3 jacobian = prim.cell.jacobian(rc);
-        jacobian.col(0) /= surface.repeatU;
-        jacobian.col(1) /= surface.repeatV;
-        Vec3 n = jacobian.inverse().transpose() * hit.normal;
-        const double length = n.norm();
-        n = length > 0 && std::isfinite(length) ? Vec3(n / length) : Vec3(-d);
-        const double scale = detail::localScale(prim.cell, rc, surface.repeatU, surface.repeatV);
+        const detail::SourcePoint p = detail::sourcePoint(prim, surface, rt, hit.normal, d);
         const int primIndex = int(&prim - mTracer.prims().data());
         const SourceRuntime& source = mSources[std::size_t(surface.texel)];
-        return detail::shadePhong(mLights, x, n, n, -d, source.material, hit.albedo, scale,
+        return detail::shadePhong(mLights, p.world, p.normal, p.normal, -d, source.material, hit.albedo, p.scale,
                                   [&](const Vec3& origin, const Vec3& l, double distance) {
-                                      return visibility(origin, l, distance, primIndex, rc, counters);
+                                      return visibility(origin, l, distance, primIndex, p.cell, counters);
                                   });
     }
 
-    static Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
 
     const std::vector<Light>& mLights;
     const detail::Tracer& mTracer;

@@ -14,21 +14,17 @@
 
 #include "footprint.h"
 #include "frame.h"
-#include "span_march.h"
 #include "shadow_queries.h"
+#include "span_march.h"
 #include "texel_runtime.h"
-#include "march.h"
 #include "tracer.h"
 
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <numbers>
-#include <optional>
 #include <sstream>
 
 namespace vtex::render {
@@ -77,18 +73,15 @@ using detail::geometricNormal;
 using detail::lightAt;
 using detail::shadingNormal;
 
-double patchSize(const Prim& prim) { return detail::patchSize(prim.p); }
-
 using detail::kTransmittanceCutoff;
 using detail::localScale;
+using detail::ShadowQueries;
 using detail::SpanContext;
 using detail::SpanMarcher;
 using detail::SpanResult;
-using detail::ShadowQueries;
 using detail::TexelRuntime;
-using detail::tile;
 
-
+double patchSize(const Prim& prim) { return detail::patchSize(prim.p); }
 
 struct PathState {
     Color radiance = Color::Zero();
@@ -191,7 +184,7 @@ private:
         const double scale = localScale(prim.cell, 0.5 * (rIn + rOut), surface);
         const int maxLevel = texel.volume->maxLevel();
         const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
-        SpanContext span(mScene, mOptions, mShadows, prim, primIndex, surface, texel, rIn, rOut, tIn, tOut,
+        SpanContext span(mScene, mOptions, mShadows, prim, primIndex, surface, texel, rIn, rOut, tIn, tOut, scale,
                          state.transmittance, choice.coarse);
         if (span.length == 0) return;
         ++counters.segments;
@@ -253,21 +246,13 @@ private:
                                const Vec3& p1, double tIn, double tOut, const Vec3& d, Counters& counters) const {
         const auto hit = texel.source->intersect(p0, p1, 0);
         if (!hit) return {};
-        const Vec3 rt = p0 + hit->s * (p1 - p0);
-        const Vec3 rc(rt.x() / surface.repeatU, rt.y() / surface.repeatV, rt.z());
-        const Vec3 x = prim.cell.map(rc);
-        Mat3 jacobian = prim.cell.jacobian(rc);
-        jacobian.col(0) /= surface.repeatU;
-        jacobian.col(1) /= surface.repeatV;
-        Vec3 n = jacobian.inverse().transpose() * hit->normal;
-        const double length = n.norm();
-        n = length > 0 && std::isfinite(length) ? Vec3(n / length) : Vec3(-d);
-        const double scale = localScale(prim.cell, rc, surface);
+        const detail::SourcePoint p = detail::sourcePoint(prim, surface, p0 + hit->s * (p1 - p0), hit->normal, d);
         const int primIndex = int(&prim - mTracer.prims().data());
         const double t = tIn + hit->s * (tOut - tIn);
         const Color radiance = detail::shadePhong(
-            mScene.lights, x, n, n, -d, texel.material, hit->albedo, scale, [&](const Vec3& origin, const Vec3& l, double distance) {
-                return mShadows.tracedShadow(origin, l, distance, mConeSpread * t, primIndex, rc, counters);
+            mScene.lights, p.world, p.normal, p.normal, -d, texel.material, hit->albedo, p.scale,
+            [&](const Vec3& origin, const Vec3& l, double distance) {
+                return mShadows.tracedShadow(origin, l, distance, mConeSpread * t, primIndex, p.cell, counters);
             });
         return {radiance, 0.0};
     }

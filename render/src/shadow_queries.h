@@ -25,9 +25,6 @@ namespace vtex::render::detail {
 inline constexpr double kTransmittanceCutoff = 1e-4;
 // Lattice steps marched exactly from a shadow query before the lattice is looked up.
 inline constexpr double kExactLatticeSteps = 4.0;
-// Shadow rays from a source-mesh hit skip this much reference space where they leave it (the
-// reference renderer's gap, reference.cpp).
-inline constexpr double kSelfIntersectionGap = 1e-5;
 
 class ShadowQueries {
 public:
@@ -81,10 +78,7 @@ public:
         if (span) {
             lr = span->light;
         } else {
-            Mat3 jt = prim.cell.jacobian(r);
-            jt.col(0) /= surface.repeatU;
-            jt.col(1) /= surface.repeatV;
-            lr = jt.inverse() * l;
+            lr = tiledJacobian(prim.cell, r, surface).inverse() * l;
             const double len = lr.norm();
             if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
             lr /= len;
@@ -139,24 +133,20 @@ public:
                 double transmittance) {
                 const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
                 const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
-                const double localWidth = width / localScale(prim.cell, 0.5 * (rIn + rOut), surface);
+                const LevelChoice choice = chooseLevel(width / localScale(prim.cell, 0.5 * (rIn + rOut), surface),
+                                                       mOptions.lodBias, texel.volume->maxLevel());
                 // The hybrid's rule for shadows too: the source mesh where the footprint is finer
                 // than the volume is faithful, blended over the next level.
-                const double meshWeight =
-                    texel.meshWeight(chooseLevel(localWidth, mOptions.lodBias, texel.volume->maxLevel()).requested);
+                const double meshWeight = texel.meshWeight(choice.requested);
                 double result = 0;
                 if (meshWeight < 1) {
                     const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tau, p0, p1,
-                                                                        shadowLevel(texel, localWidth),
+                                                                        shadowLevel(texel, choice),
                                                                         kTransmittanceCutoff / transmittance);
                     counters.voxels += seg.blocks;
                     result = (1 - meshWeight) * seg.transmittance;
                 }
-                if (meshWeight > 0) {
-                    const double length = (p1 - p0).norm();
-                    const double sMin = startsAtHint ? (length > 0 ? kSelfIntersectionGap / length : 1.0) : 0.0;
-                    if (!texel.source->occluded(p0, p1, sMin)) result += meshWeight;
-                }
+                if (meshWeight > 0 && !texel.source->occludedLeaving(p0, p1, startsAtHint)) result += meshWeight;
                 return result;
             });
     }
@@ -164,7 +154,9 @@ public:
     // A shadow march takes the single level nearest the cone's width (reference units), never
     // coarser than the texel's coarsest faithful level (TexelRuntime): shadows are not blended.
     int shadowLevel(const TexelRuntime& texel, double width) const {
-        const LevelChoice choice = chooseLevel(width, mOptions.lodBias, texel.volume->maxLevel());
+        return shadowLevel(texel, chooseLevel(width, mOptions.lodBias, texel.volume->maxLevel()));
+    }
+    static int shadowLevel(const TexelRuntime& texel, const LevelChoice& choice) {
         return std::max(texel.coarsestShadowLevel, choice.fineWeight < 0.5 ? choice.coarse : choice.fine);
     }
 

@@ -27,6 +27,11 @@ struct SourceHit {
 /// along x and y) and cut where they cross from one copy to the next. A cyclic volume's mesh
 /// wraps around in x and y as the sampler wrapped it: the parts that stick out of the cube are
 /// seen from the other side, through instances of the one BVH shifted by whole units.
+/// Shadow rays skip this much reference space (1e-5 of the unit cube, under a hundredth of a
+/// voxel at 1024³) from where they leave a source triangle: far above the float rounding of the
+/// BVH, far below any feature the sampler can resolve.
+inline constexpr double kSelfIntersectionGap = 1e-5;
+
 class SourceBvh {
 public:
     SourceBvh(const ingest::TriangleMesh& mesh, const octree::VolumeInfo& volume);
@@ -38,6 +43,12 @@ public:
     std::optional<SourceHit> intersect(const Vec3& p0, const Vec3& p1, double sMin) const;
     /// Whether any triangle lies on p0 + s·(p1 − p0), s ∈ (sMin, 1].
     bool occluded(const Vec3& p0, const Vec3& p1, double sMin) const;
+    /// occluded(), the first kSelfIntersectionGap skipped when the segment leaves a source hit at
+    /// p0 (a shadow ray from a shaded triangle) so that the triangle does not shadow itself.
+    bool occludedLeaving(const Vec3& p0, const Vec3& p1, bool leavesAHit) const {
+        const double length = (p1 - p0).norm();
+        return occluded(p0, p1, leavesAHit ? (length > 0 ? kSelfIntersectionGap / length : 1.0) : 0.0);
+    }
 
     std::uint64_t triangleCount() const { return mMesh.triangles.size(); }
     bool cyclic() const { return mCyclic; }

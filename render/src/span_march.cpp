@@ -44,8 +44,9 @@ int nearestRecorded(const SpanContext::ShadowTrack& track, double sm, double sha
 
 SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const ShadowQueries& shadows, const Prim& prim_,
                          int primIndex_, const SurfaceRuntime& surface_, const TexelRuntime& texel_, const Vec3& rIn,
-                         const Vec3& rOut, double tIn_, double tOut_, double startTransmittance, int coarseLevel)
-    : prim(prim_), primIndex(primIndex_), surface(surface_), texel(texel_), tIn(tIn_), tOut(tOut_),
+                         const Vec3& rOut, double tIn_, double tOut_, double scale_, double startTransmittance,
+                         int coarseLevel)
+    : prim(prim_), primIndex(primIndex_), surface(surface_), texel(texel_), tIn(tIn_), tOut(tOut_), scale(scale_),
       startT(startTransmittance), shareDistance(1.0 / double(std::int64_t(1) << coarseLevel)),
       lights(scene.lights.size()), tracks(scene.lights.size()) {
     p0 = tile(rIn, surface);
@@ -57,14 +58,9 @@ SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const
         return;
     }
     dir = delta / length;
-    const Vec3 rMid = 0.5 * (rIn + rOut);
-    scale = localScale(prim.cell, rMid, surface);
     // Light directions go to reference space through the inverse Jacobian of the tiled map,
     // taken once per span (the mild-deformation assumption again).
-    Mat3 jt = prim.cell.jacobian(rMid);
-    jt.col(0) /= surface.repeatU;
-    jt.col(1) /= surface.repeatV;
-    jtInv = jt.inverse();
+    jtInv = tiledJacobian(prim.cell, 0.5 * (rIn + rOut), surface).inverse();
     if (!jtInv.allFinite()) jtInv = Mat3::Identity();
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
         Light& sl = lights[i];

@@ -66,8 +66,4 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
     return texels;
 }
 
-double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
-    return detail::localScale(cell, r, s.repeatU, s.repeatV);
-}
-
 }  // namespace vtex::render::detail

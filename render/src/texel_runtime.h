@@ -41,10 +41,4 @@ struct TexelRuntime {
 /// vtex::InputError naming a volume without a root, or a source that cannot be read.
 std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options);
 
-/// Tiled reference coordinates of cell coordinates r on surface s (x and y times its repeat).
-inline Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
-
-/// World length per unit of tiled reference space around cell coordinates r (footprint.h).
-double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s);
-
 }  // namespace vtex::render::detail
