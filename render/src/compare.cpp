@@ -144,7 +144,7 @@ std::optional<std::pair<int, int>> firstUnmeasurablePixel(const Image& image) {
 
 ImageComparison compareImages(const Image& a, const Image& b) {
     requireSameSize(a, b);
-    if (firstUnmeasurablePixel(a) || firstUnmeasurablePixel(b)) throw std::invalid_argument("an image has a pixel that is not finite");
+    if (firstUnmeasurablePixel(a) || firstUnmeasurablePixel(b)) throw std::invalid_argument("an image has a pixel that is not finite or is beyond ±1e30");
     ImageComparison result;
     result.width = a.width;
     result.height = a.height;

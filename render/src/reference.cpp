@@ -200,7 +200,7 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
         if (!def.sourceData && def.source.empty())
             throw InputError(scene.file, "texel '" + def.name + "' has no source mesh (vtex reference draws it)", "texel.source");
         SourceRuntime& runtime = sources[*s.texel];
-        runtime.mesh = def.sourceData ? def.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source));
+        runtime.mesh = detail::loadSourceMesh(def);
         // Where the sampler put the mesh in the unit cube is recorded in the volume.
         const octree::VolumeInfo placement =
             def.octree ? def.octree->info.source : octree::readVto(def.volume).info.source;

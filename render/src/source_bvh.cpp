@@ -1,6 +1,8 @@
 // See source_bvh.h.
 #include "source_bvh.h"
 
+#include <vtex/ingest/ingest.h>
+
 #include "embree_ray.h"
 
 #include <embree3/rtcore.h>
@@ -20,6 +22,10 @@ namespace {
 constexpr int kMaxShift = 4;
 
 }  // namespace
+
+std::shared_ptr<const ingest::TriangleMesh> loadSourceMesh(const TexelDef& texel) {
+    return texel.sourceData ? texel.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(texel.source));
+}
 
 SourceBvh::SourceBvh(const ingest::TriangleMesh& mesh, const octree::VolumeInfo& volume)
     : mMesh(mesh), mCyclic(volume.cyclic) {

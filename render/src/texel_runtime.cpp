@@ -2,7 +2,6 @@
 #include "texel_runtime.h"
 
 #include <vtex/core/error.h>
-#include <vtex/ingest/ingest.h>
 #include <vtex/octree/chord_transmittance.h>
 
 #include "footprint.h"
@@ -50,7 +49,7 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
         // With a source, the levels the volume is faithful at are measured (one pass of chords):
         // shadows keep to them, and the hybrid traces the mesh past the finest of them.
         if (def.sourceData || !def.source.empty()) {
-            t.sourceMesh = def.sourceData ? def.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source));
+            t.sourceMesh = loadSourceMesh(def);
             auto source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
             const FaithfulLevels faithful = faithfulLevels(*tree, *source, def.tau, options.hybridTolerance);
             t.coarsestShadowLevel = faithful.coarsest;

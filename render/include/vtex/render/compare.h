@@ -49,8 +49,8 @@ struct ImageComparison {
 /// float's range); callers refuse it naming the file.
 std::optional<std::pair<int, int>> firstUnmeasurablePixel(const Image& image);
 
-/// Compares two images of equal size. Throws std::invalid_argument when the sizes differ or a
-/// colour channel is not finite.
+/// Compares two images of equal size. Throws std::invalid_argument when the sizes differ or an
+/// image has an unmeasurable pixel (firstUnmeasurablePixel).
 ImageComparison compareImages(const Image& a, const Image& b);
 
 /// Per-pixel RMS error over R, G, B mapped to a black–red–yellow–white ramp, full scale at
