@@ -74,7 +74,7 @@ struct ApproximationBudget {
     /// below this fraction of what it was at the last query, and reuses the last one otherwise;
     /// in (0, 1]. 1 (the default): a query at every voxel that absorbs anything, exact. Below 1
     /// deeper voxels reuse shallower voxels' shadows and are too bright: on the bush field 0.25
-    /// raised the image mean by 14–32 % (docs/render.md, "Shadows").
+    /// raised the image mean by 21–51 % (docs/render.md, "Shadows").
     double shadowRefresh = 1;
 
     /// Every approximation off.
