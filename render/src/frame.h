@@ -22,6 +22,7 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <string>
 #include <vector>
 
 namespace vtex::render::detail {
@@ -88,11 +89,17 @@ struct Counters {
     }
 };
 
-/// Pixel channels clamped when stored (storedRadiance), over all tiles.
-inline std::uint64_t clampedChannels(const std::vector<Counters>& tiles) {
-    std::uint64_t n = 0;
-    for (const Counters& c : tiles) n += c.clamped;
-    return n;
+/// A render's warnings: the scene's, then one if pixel channels were clamped when stored
+/// (storedRadiance), with their count over all tiles.
+inline std::vector<std::string> renderWarnings(const Scene& scene, const std::vector<Counters>& tiles) {
+    std::vector<std::string> warnings = scene.warnings;
+    std::uint64_t clamped = 0;
+    for (const Counters& c : tiles) clamped += c.clamped;
+    if (clamped)
+        warnings.push_back(std::to_string(clamped) +
+                           " pixel channels overflowed (or were NaN) and were clamped to float's range: "
+                           "check the lights' colours and the materials");
+    return warnings;
 }
 
 /// The statistics every render reports, from the counters summed over the tiles.

@@ -252,11 +252,7 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     result.stats.renderer = deformedMode ? "reference-deformed" : "reference-embedded";
     result.stats.referenceTriangles = deformedMode ? deformed->triangleCount() : sourceTriangles;
     result.image = std::move(image);
-    result.warnings = scene.warnings;
-    if (const std::uint64_t clamped = detail::clampedChannels(tileCounters))
-        result.warnings.push_back(std::to_string(clamped) +
-                                  " pixel channels overflowed (or were NaN) and were clamped to float's range: "
-                                  "check the lights' colours and the materials");
+    result.warnings = detail::renderWarnings(scene, tileCounters);
     return result;
 }
 

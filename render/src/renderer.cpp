@@ -321,11 +321,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
         if (t.volume) result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
     result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
     result.image = std::move(image);
-    result.warnings = scene.warnings;
-    if (const std::uint64_t clamped = detail::clampedChannels(tileCounters))
-        result.warnings.push_back(std::to_string(clamped) +
-                                  " pixel channels overflowed (or were NaN) and were clamped to float's range: "
-                                  "check the lights' colours and the materials");
+    result.warnings = detail::renderWarnings(scene, tileCounters);
     return result;
 }
 
