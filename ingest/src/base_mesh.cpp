@@ -4,6 +4,8 @@
 // collapsed quad, a larger polygon is cut into quads (and a last triangle) from its first corner.
 #include "detail.h"
 
+#include <vtex/core/input_file.h>
+
 #include <vtex/core/error.h>
 #include <vtex/ingest/base_mesh.h>
 
@@ -21,7 +23,7 @@ QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& op
                    [](unsigned char c) { return char(std::tolower(c)); });
     const std::filesystem::path directory = file.parent_path().empty() ? "." : file.parent_path();
     detail::RawMesh raw;
-    const std::string bytes = detail::readFileBounded(file, options.maxFileBytes);
+    const std::string bytes = readInputFile(file, options.maxFileBytes, "file");
     if (extension == ".gltf" || extension == ".glb")
         raw = detail::readGltf(bytes, extension == ".glb", file, directory, options);
     else if (extension == ".obj")

@@ -59,9 +59,6 @@ std::optional<T> parseDecimal(std::string_view token) {
     return value;
 }
 
-/// Reads a whole regular file of at most `maxBytes` bytes. Throws InputError.
-std::string readFileBounded(const std::filesystem::path& file, std::uint64_t maxBytes);
-
 /// True when `candidate`, resolved through symbolic links, lies inside the directory `root`
 /// (itself canonical) and is a regular file.
 bool isContainedRegularFile(const std::filesystem::path& root, const std::filesystem::path& candidate);

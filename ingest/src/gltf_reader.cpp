@@ -8,6 +8,8 @@
 // asset version, every bufferView and accessor extent (overflow-safe), and the node graph.
 #include "detail.h"
 
+#include <vtex/core/input_file.h>
+
 #include <vtex/core/error.h>
 
 #include <tiny_gltf.h>
@@ -58,7 +60,7 @@ bool fsReadWholeFile(std::vector<unsigned char>* out, std::string* err, const st
         return false;
     }
     try {
-        const std::string bytes = readFileBounded(path, context->maxBytes);
+        const std::string bytes = readInputFile(path, context->maxBytes, "file");
         out->assign(bytes.begin(), bytes.end());
         return true;
     } catch (const std::exception& e) {

@@ -16,9 +16,6 @@ namespace detail {
 
 namespace fs = std::filesystem;
 
-// The one reader of a given file (core/input_file.h): regular, bounded, whole.
-std::string readFileBounded(const fs::path& file, std::uint64_t maxBytes) { return readInputFile(file, maxBytes, "file"); }
-
 bool isContainedRegularFile(const fs::path& root, const fs::path& candidate) {
     std::error_code error;
     const fs::path resolved = fs::canonical(candidate, error);  // follows every symbolic link
@@ -66,13 +63,13 @@ TriangleMesh loadMesh(const std::filesystem::path& file, const IngestOptions& op
     detail::RawMesh raw;
     phase(options, "reading");
     if (extension == ".gltf" || extension == ".glb") {
-        const std::string bytes = detail::readFileBounded(file, options.maxFileBytes);
+        const std::string bytes = readInputFile(file, options.maxFileBytes, "file");
         raw = detail::readGltf(bytes, extension == ".glb", file, directory, options);
     } else if (extension == ".obj") {
-        const std::string bytes = detail::readFileBounded(file, options.maxFileBytes);
+        const std::string bytes = readInputFile(file, options.maxFileBytes, "file");
         raw = detail::readObj(bytes, file, directory, options);
     } else if (extension == ".off" || extension == ".ply" || extension == ".stl") {
-        const std::string bytes = detail::readFileBounded(file, options.maxFileBytes);
+        const std::string bytes = readInputFile(file, options.maxFileBytes, "file");
         raw = detail::readOffPlyStl(bytes, extension.substr(1), file, options);
     } else {
         throw InputError(file, "unknown mesh format '" + extension +

@@ -9,6 +9,8 @@
 // outside the input's folder. OFF, PLY and STL still go through OpenMesh (openmesh_reader.cpp).
 #include "detail.h"
 
+#include <vtex/core/input_file.h>
+
 #include <vtex/core/error.h>
 
 #include <algorithm>
@@ -267,7 +269,7 @@ private:
         }
         std::string text;
         try {
-            text = readFileBounded(path, mOptions.maxFileBytes);
+            text = readInputFile(path, mOptions.maxFileBytes, "file");
         } catch (const InputError& e) {
             mOut.warnings.push_back(std::string("material library ignored: ") + e.what());
             return false;
@@ -316,7 +318,7 @@ private:
         std::string why = "not found inside the input's folder";
         if (!path.empty()) {
             try {
-                const std::string bytes = readFileBounded(path, mOptions.maxFileBytes);
+                const std::string bytes = readInputFile(path, mOptions.maxFileBytes, "file");
                 if (auto image = decodeImage(bytes, mOptions, why)) {
                     index = int(mOut.textures.size());
                     mOut.textures.push_back(std::move(*image));
