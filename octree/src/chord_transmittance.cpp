@@ -3,6 +3,8 @@
 
 #include <vtex/octree/voxel.h>
 
+#include "hash.h"
+
 
 #include <Eigen/Geometry>
 #include <tbb/blocked_range.h>
@@ -17,18 +19,12 @@
 namespace vtex::octree {
 namespace {
 
-// A pure function of its inputs (splitmix64 finaliser), so chords do not depend on threads.
-std::uint64_t mix(std::uint64_t x) {
-    x += 0x9E3779B97F4A7C15ull;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return x ^ (x >> 31);
-}
+using detail::mix64;
 
 struct ChordRng {
     std::uint64_t state;
     double next() {
-        state = mix(state);
+        state = mix64(state);
         return double(state >> 11) * 0x1.0p-53;
     }
 };
@@ -119,7 +115,7 @@ std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, co
     std::vector<char> misses(count, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j != r.end(); ++j) {
-            ChordRng rng{mix(seed ^ mix(0xC0FFEEull + std::uint64_t(j)))};
+            ChordRng rng{mix64(seed ^ mix64(0xC0FFEEull + std::uint64_t(j)))};
             lines[j] = randomChord(Vec3::Zero(), 1.0, rng);
             misses[j] = visible(lines[j].a, lines[j].b) ? 1 : 0;
         }

@@ -12,6 +12,8 @@
 // build of the same volume yields.
 #include <vtex/octree/octree.h>
 
+#include "hash.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -36,12 +38,7 @@ struct PNode {
 
 using Level = std::vector<PNode>;
 
-std::uint64_t mix64(std::uint64_t x) {
-    x += 0x9E3779B97F4A7C15ull;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return x ^ (x >> 31);
-}
+using detail::mix64;
 
 // Whether the filter error of node `key` of `level` is measured, given that the level has
 // `count` filtered nodes: a hash-selected sample of about `samples` of them, independent of the
