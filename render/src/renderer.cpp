@@ -80,6 +80,7 @@ using detail::SpanContext;
 using detail::SpanMarcher;
 using detail::SpanResult;
 using detail::TexelRuntime;
+using detail::tile;
 
 double patchSize(const Prim& prim) { return detail::patchSize(prim.p); }
 
@@ -184,9 +185,9 @@ private:
         const double scale = localScale(prim.cell, 0.5 * (rIn + rOut), surface);
         const int maxLevel = texel.volume->maxLevel();
         const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
-        SpanContext span(mScene, mOptions, mShadows, prim, primIndex, surface, texel, rIn, rOut, tIn, tOut, scale,
-                         state.transmittance, choice.coarse);
-        if (span.length == 0) return;
+        const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
+        const double length = (p1 - p0).norm();
+        if (!(length > 0) || !std::isfinite(length)) return;
         ++counters.segments;
         // A blend weight below blendCutoff goes to the other level, which is then the only one
         // marched: the image moves by at most that weight times the difference of the two
@@ -197,11 +198,12 @@ private:
         const double fineWeight = cut(choice.fineWeight);
         const double meshWeight = cut(texel.meshWeight(choice.requested));
         counters.mesh += meshWeight;
-        if (meshWeight >= 1) {
-            compositeSpan(traceSourceSpan(prim, surface, texel, span.p0, span.p1, tIn, tOut, d, counters),
-                          choice.level, tMid, state);
+        if (meshWeight >= 1) {  // the mesh alone: none of the volume's per-span set-up
+            compositeSpan(traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid, state);
             return;
         }
+        SpanContext span(mScene, mOptions, mShadows, prim, primIndex, surface, texel, rIn, rOut, tIn, tOut, scale,
+                         state.transmittance, choice.coarse);
         if (counters.histogram.size() < std::size_t(maxLevel + 1)) counters.histogram.resize(std::size_t(maxLevel + 1), 0.0);
         if (fineWeight < 1) counters.histogram[std::size_t(choice.coarse)] += (1 - fineWeight) * (1 - meshWeight);
         if (fineWeight > 0) counters.histogram[std::size_t(choice.fine)] += fineWeight * (1 - meshWeight);
@@ -216,8 +218,7 @@ private:
             if (fineWeight > 0) blend(result, mMarcher.march(span, choice.fine, false, fineWeight, counters), fineWeight);
         }
         if (meshWeight > 0)
-            blend(result, traceSourceSpan(prim, surface, texel, span.p0, span.p1, tIn, tOut, d, counters),
-                  meshWeight);
+            blend(result, traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters), meshWeight);
         compositeSpan(result, choice.level, tMid, state);
     }
 
