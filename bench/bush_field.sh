@@ -20,7 +20,7 @@
 # Writes DIR/bush_field.md and DIR/bush_field.csv, and prints the markdown.
 # Usage: bench/bush_field.sh VTEX_BINARY [DIR] [RUNS] [THREADS]
 #   (environment: WIDTH, HEIGHT (768×576), TRUTH_SPP (1024), TRUTH_SPP_NEAR (256), RUNS,
-#    THREADS, VARIANTS, DENSE, SWEEP, SWEEP_TRUTH_SPP, TRUTH_KEY; arguments win)
+#    THREADS, VARIANTS, DENSE, SWEEP, SWEEP_TRUTH_SPP, TRUTH_KEY, COMPARE_VTEX; arguments win)
 set -eu
 VTEX=${1:?usage: bush_field.sh VTEX_BINARY [DIR] [RUNS] [THREADS]}
 case $VTEX in /*) ;; *) VTEX=$(pwd)/$VTEX ;; esac
@@ -36,6 +36,10 @@ TRUTH_KEY=${TRUTH_KEY:-v1}
 VARIANTS=${VARIANTS:-}
 DENSE=${DENSE:-0}
 SWEEP=${SWEEP:-0}
+# The binary that measures (`vtex compare` with its bias and split fields): by default the one
+# measured; set it to a current build to measure an older one (a before/after table).
+COMPARE_VTEX=${COMPARE_VTEX:-$VTEX}
+case $COMPARE_VTEX in /*) ;; *) COMPARE_VTEX=$(pwd)/$COMPARE_VTEX ;; esac
 HELPER=$(cd "$(dirname "$0")" && pwd)/bush_field.py
 START=$(date +%s)
 echo "start: $(uptime)"
@@ -94,7 +98,7 @@ while [ $round -le "$RUNS" ]; do
 done
 while IFS='|' read -r _ view name _; do
   if [ -e "truth_$view.exr" ]; then
-    "$VTEX" compare "out/$view.$name.exr" "truth_$view.exr" --json > "out/$view.$name.cmp.json"
+    "$COMPARE_VTEX" compare "out/$view.$name.exr" "truth_$view.exr" --json > "out/$view.$name.cmp.json"
   fi
 done < rows.txt
 
