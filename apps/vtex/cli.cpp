@@ -1,4 +1,6 @@
 #include "cli.h"
+
+#include <vtex/core/memory_budget.h>
 #include "registry.h"
 
 #include <cstdio>
@@ -38,10 +40,14 @@ const Inspector* findInspector(const std::string& extension) {
     return found == registry.end() ? nullptr : &found->second;
 }
 
-std::uint64_t defaultMemoryLimit() {
-    const long pages = ::sysconf(_SC_PHYS_PAGES), size = ::sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || size <= 0) return 0;  // unknown: no limit
-    return std::uint64_t(pages) * std::uint64_t(size) / 2;
+CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::string& work) {
+    limit = defaultMemoryLimit();
+    return app
+        .add_option("--max-memory", limit,
+                    "Refuse before starting if " + work +
+                        " is estimated to exceed this (e.g. 4GiB, 512MB; default half of this machine's memory, " +
+                        formatBytes(limit) + " here; 0: no limit)")
+        ->transform(CLI::AsSizeValue(false));
 }
 
 CLI::Validator finiteNumber() {

@@ -57,10 +57,11 @@ const Inspector* findInspector(const std::string& extension);
 /// and an infinite or NaN flag would reach the stages as a value. Checked before any range.
 CLI::Validator finiteNumber();
 
-/// The memory a command may plan for when its user sets no --max-memory: half of this machine's
-/// physical memory (sysconf), so that a resolution or image too large for it is refused at once
-/// with its estimate instead of running into the kernel's OOM killer.
-std::uint64_t defaultMemoryLimit();
+/// `--max-memory SIZE` into `limit`, which starts at vtex::defaultMemoryLimit() (half of this
+/// machine's physical memory): a resolution, image or volume too large for it is refused at once
+/// with its estimate (exit 3) instead of running into the kernel's OOM killer. `work` says what
+/// is estimated ("the sampler's footprint").
+CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::string& work);
 
 /// Accepts a power of two from 1 to `largest` (voxel resolutions).
 CLI::Validator powerOfTwo(unsigned long long largest);

@@ -3,6 +3,7 @@
 #include "cli.h"
 
 #include <vtex/core/atomic_file.h>
+#include <vtex/core/memory_budget.h>
 #include <vtex/octree/octree.h>
 
 #include <chrono>
@@ -22,6 +23,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         std::string filter = "sggx";
         double tolerance = 0;
         std::uint64_t filterErrorSamples = 4096;
+        std::uint64_t maxMemory = 0;
     };
     auto flags = std::make_shared<Flags>();
     app.add_option("VOLUME", flags->input, "Sampled volume (.vtl)")->required();
@@ -40,8 +42,11 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     app.add_option("--filter-error-samples", flags->filterErrorSamples,
                    "Nodes per level on which the filter error is measured (0 = all)")
         ->capture_default_str();
+    addMaxMemoryOption(app, flags->maxMemory, "reading the volume and building its octree");
     return [flags](const GlobalOptions& global) {
         checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
+        checkMemoryEstimate(flags->input, "building its octree", octree::estimateBuildMemory(flags->input),
+                            flags->maxMemory);
         const auto start = std::chrono::steady_clock::now();
         const octree::SparseVolume volume = octree::readVtl(flags->input);
         octree::BuildOptions options;

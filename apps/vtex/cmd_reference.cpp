@@ -15,7 +15,6 @@ struct ReferenceArgs : ImageCommandArgs {
     int spp = 16;
     std::string mode = "embedded";
     double tolerance = 1e-3;
-    double maxMemoryGiB = 4;
 };
 
 const bool registered = registerCommand(45, [](CLI::App& app) -> Action {
@@ -36,21 +35,13 @@ const bool registered = registerCommand(45, [](CLI::App& app) -> Action {
         ->check(finiteNumber())
         ->check(CLI::Range(1e-6, 1.0))
         ->capture_default_str();
-    app.add_option("--max-memory", a->maxMemoryGiB, "Deformed mode: refuse scenes whose deformed triangles need more (GiB)")
-        ->check(finiteNumber())
-        ->check(CLI::Range(1e-6, 1024.0))
-        ->capture_default_str();
     return [a](const GlobalOptions& global) {
         const render::Scene scene = loadSceneFor(*a, global);
         render::ReferenceOptions options;
-        options.width = a->width;
-        options.height = a->height;
+        applyImageOptions(*a, options);
         options.spp = a->spp;
-        options.threads = a->threads;
-        options.aovs = a->aovs;
         options.mode = a->mode == "deformed" ? render::ReferenceMode::Deformed : render::ReferenceMode::Embedded;
         options.tolerance = a->tolerance;
-        options.maxMemoryBytes = a->maxMemoryGiB * double(1ull << 30);
         TerminalProgress progress(global);
         const render::RenderResult result = render::renderReference(scene, options, progress);
         writeImageOutputs(result, *a);

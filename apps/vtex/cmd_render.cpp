@@ -52,13 +52,10 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
     return [a](const GlobalOptions& global) {
         const render::Scene scene = loadSceneFor(*a, global);
         render::RenderOptions options;
-        options.width = a->width;
-        options.height = a->height;
+        applyImageOptions(*a, options);
         options.spp = a->spp;
         options.lodBias = a->lodBias;
-        options.threads = a->threads;
         options.shading = a->shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
-        options.aovs = a->aovs;
         if (a->exact) options.approximations = render::ApproximationBudget::exact();
         else options.approximations.shadowRefresh = a->shadowRefresh;
         options.hybrid = a->hybrid == "on";

@@ -17,12 +17,14 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         std::string file, output;
         bool force = false;
         int jobs = 0;
+        std::uint64_t maxMemory = 0;
     };
     auto o = std::make_shared<Options>();
     app.add_option("PIPELINE", o->file, "The pipeline file (.toml)")->required();
     app.add_option("-o,--output", o->output, "Output directory (default: the file's [pipeline] output, or <name>-out)");
     app.add_flag("--force", o->force, "Redo every stage, cached or not");
     app.add_option("--jobs", o->jobs, "Stages run at once (0: as many as cores)")->check(CLI::Range(0, 1024));
+    addMaxMemoryOption(app, o->maxMemory, "a stage, together with those running beside it,");
     return [o](const GlobalOptions& global) {
         const pipelines::Pipeline pipeline = pipelines::loadPipeline(o->file);
         for (const auto& w : pipeline.warnings) warning(global, w);
@@ -30,14 +32,20 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         options.output = o->output;
         options.force = o->force;
         options.jobs = o->jobs;
+        options.maxMemoryBytes = o->maxMemory;
         options.log = [&global](const std::string& line) { status(global, line); };
         const pipelines::RunReport report = pipelines::runPipeline(pipeline, options);
         for (const auto& omission : report.leftOut) status(global, "left out: texel " + omission.texel + ": " + omission.reason);
         status(global, "report: " + report.reportHtml.string());
         if (!report.succeeded()) {
+            // Exit 3 when a stage failed on bad input (a mesh, a scene, an estimate over the memory
+            // limit), 1 otherwise; the message is the first failure's.
             for (const auto& stage : report.stages)
-                if (stage.status == pipelines::StageRecord::Status::Failed)
-                    throw std::runtime_error(stage.kind + " '" + stage.name + "' failed: " + stage.message);
+                if (stage.status == pipelines::StageRecord::Status::Failed) {
+                    const std::string what = stage.kind + " '" + stage.name + "' failed: " + stage.message;
+                    if (stage.badInput) throw InputError(o->file, what);
+                    throw std::runtime_error(what);
+                }
             throw std::runtime_error("some stages did not run");
         }
     };

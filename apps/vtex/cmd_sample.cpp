@@ -26,7 +26,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         std::string solid = "auto";
         std::string bounds = "auto";
         double solidDensity = 0;
-        std::uint64_t maxMemory = defaultMemoryLimit();
+        std::uint64_t maxMemory = 0;
     };
     auto flags = std::make_shared<Flags>();
     app.add_option("MESH", flags->input, "Source mesh (.glb, or anything `vtex ingest` reads)")->required();
@@ -45,10 +45,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
                    "Source → unit cube: auto (unit if the mesh fits in [0,1]³, else fit), unit, fit")
         ->capture_default_str()
         ->check(CLI::IsMember({"auto", "unit", "fit"}));
-    app.add_option("--max-memory", flags->maxMemory,
-                   "Refuse before starting if the estimated footprint exceeds this (e.g. 4GiB, 512MB; "
-                   "default half of this machine's memory; 0: no limit)")
-        ->transform(CLI::AsSizeValue(false));
+    addMaxMemoryOption(app, flags->maxMemory, "the sampler's footprint");
     return [flags](const GlobalOptions& global) {
         checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
         const auto start = std::chrono::steady_clock::now();
@@ -64,6 +61,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
                                                   : sampler::BoundsMode::Auto;
         options.solidDensity = flags->solidDensity;
         options.maxMemoryBytes = flags->maxMemory;
+        options.source = flags->input;
         if (options.cyclic && options.solid == sampler::SolidMode::On)
             throw CLI::ValidationError("--solid on", "cannot be combined with --cyclic");
         if (options.solid == sampler::SolidMode::On && !mesh.closed)
@@ -75,12 +73,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
             status(global, line);
         }
         TerminalProgress progress(global);
-        octree::SparseVolume volume;
-        try {
-            volume = sampler::sampleMesh(mesh, options, progress);
-        } catch (const sampler::MemoryLimitError& e) {
-            throw InputError(flags->input, std::string(e.what()) + " (--max-memory; by default half of this machine's memory)");
-        }
+        const octree::SparseVolume volume = sampler::sampleMesh(mesh, options, progress);
         octree::writeVtl(volume, flags->output);
         std::uint64_t surface = 0, solid = 0;
         for (const auto& b : volume.blocks) (b.isSolid() ? solid : surface)++;

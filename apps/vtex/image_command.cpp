@@ -16,7 +16,16 @@ void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::st
     app.add_option("--stats", args.stats, "Write statistics (times, rays, …) as JSON");
     app.add_option("--threads", args.threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
     app.add_flag("--aov", args.aovs, aovHelp);
+    addMaxMemoryOption(app, args.maxMemory, "the image and what the scene loads");
     app.footer("Exit status: 0 success, 2 bad usage, 3 bad input (file and key named), 1 other failure.");
+}
+
+void applyImageOptions(const ImageCommandArgs& args, render::ImageOptions& options) {
+    options.width = args.width;
+    options.height = args.height;
+    options.threads = args.threads;
+    options.aovs = args.aovs;
+    options.maxMemoryBytes = args.maxMemory;
 }
 
 render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global) {

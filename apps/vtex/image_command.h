@@ -7,6 +7,7 @@
 #include <vtex/render/renderer.h>
 #include <vtex/render/scene.h>
 
+#include <cstdint>
 #include <string>
 
 namespace vtex::cli {
@@ -20,10 +21,13 @@ struct ImageCommandArgs {
     int height = 0;
     int threads = 0;
     bool aovs = false;
+    std::uint64_t maxMemory = 0;
 };
 
-/// SCENE, -o/--output, --png, --width, --height, --stats, --threads, --aov.
+/// SCENE, -o/--output, --png, --width, --height, --stats, --threads, --aov, --max-memory.
 void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::string& aovHelp);
+/// The size, threads, AOVs and memory limit the flags set (the caller sets spp: its range differs).
+void applyImageOptions(const ImageCommandArgs& args, render::ImageOptions& options);
 /// Checks every output path (checkOutputPath: a regular file or a new path, not the scene)
 /// before any work, then loads the scene and prints its warnings.
 render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global);

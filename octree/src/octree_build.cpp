@@ -482,4 +482,11 @@ Octree buildOctree(const SparseVolume& volume, const BuildOptions& options, Prog
     return builder.compress(progress);
 }
 
+std::uint64_t estimateBuildMemory(const std::filesystem::path& file) {
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(file, ec);
+    if (ec) return 0;
+    return std::uint64_t(std::min(12.0 * double(size) + double(32 << 20), 1.8e19));
+}
+
 }  // namespace vtex::octree

@@ -4,6 +4,7 @@
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
+#include <vtex/core/memory_budget.h>
 #include <vtex/core/version.h>
 #include <vtex/ingest/ingest.h>
 #include <vtex/octree/octree.h>
@@ -213,6 +214,9 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     std::vector<Stage> stages;
     std::map<std::string, std::size_t> sourceIndex, sampleIndex, buildIndex, renderIndex;
     const std::string header = std::string("vtex ") + kVersion + "\n";
+    // One memory limit for the stages that run side by side: each reserves its estimate before
+    // its work and waits while the others leave too little (memory_budget.h).
+    MemoryBudget budget(options.maxMemoryBytes);
 
     for (const SourceStep& step : pipeline.sources) {
         Stage s{"source", step.name};
@@ -266,14 +270,17 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
               << "\nmesh " << stages[sourceStage].outputHashes.at("mesh") << "\n";
             return d.str();
         };
-        s.run = [&stages, step, cyclic, sourceStage, sampledResolution](Stage& self) {
-            const ingest::TriangleMesh mesh = ingest::loadMesh(stages[sourceStage].outputs.at("mesh"));
+        s.run = [&stages, &budget, step, cyclic, sourceStage, sampledResolution](Stage& self) {
+            const fs::path meshFile = stages[sourceStage].outputs.at("mesh");
+            const ingest::TriangleMesh mesh = ingest::loadMesh(meshFile);
             sampler::SampleOptions o;
             o.resolution = sampledResolution;
             o.cyclic = cyclic;
             o.solid = step.solid == "on" ? sampler::SolidMode::On
                       : step.solid == "off" ? sampler::SolidMode::Off
                                             : sampler::SolidMode::Auto;
+            const auto held = budget.reserve(meshFile, "sampling at " + std::to_string(sampledResolution) + "^3",
+                                             sampler::estimateSampleMemory(mesh, o));
             NullProgress quiet;
             const octree::SparseVolume volume = sampler::sampleMesh(mesh, o, quiet);
             octree::writeVtl(volume, self.outputs.at("volume"));
@@ -301,8 +308,10 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
               << stages[sampleStage].outputHashes.at("volume") << "\n";
             return d.str();
         };
-        b.run = [&stages, step, sampleStage](Stage& self) {
-            const octree::SparseVolume volume = octree::readVtl(stages[sampleStage].outputs.at("volume"));
+        b.run = [&stages, &budget, step, sampleStage](Stage& self) {
+            const fs::path volumeFile = stages[sampleStage].outputs.at("volume");
+            const auto held = budget.reserve(volumeFile, "building its octree", octree::estimateBuildMemory(volumeFile));
+            const octree::SparseVolume volume = octree::readVtl(volumeFile);
             octree::BuildOptions o;
             o.rule = *octree::parseFilterRule(step.filter);
             o.tolerance = step.tolerance;
@@ -376,11 +385,19 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                 for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
             return d.str();
         };
-        r.run = [step, boundScene](Stage& self) {
+        r.run = [&budget, step, boundScene](Stage& self) {
             NullProgress quiet;
-            const render::RenderResult result = step.renderer == "reference"
-                                                    ? render::renderReference(boundScene(), referenceOptions(step), quiet)
-                                                    : render::renderScene(boundScene(), renderOptions(step), quiet);
+            const render::Scene scene = boundScene();
+            const bool reference = step.renderer == "reference";
+            const render::ReferenceOptions referenceSettings = referenceOptions(step);
+            const render::RenderOptions renderSettings = renderOptions(step);
+            const int width = step.width > 0 ? step.width : scene.camera.width;
+            const int height = step.height > 0 ? step.height : scene.camera.height;
+            const auto held = budget.reserve(step.scene, "rendering " + std::to_string(width) + "x" + std::to_string(height),
+                                             reference ? render::estimateReferenceMemory(scene, referenceSettings)
+                                                       : render::estimateRenderMemory(scene, renderSettings));
+            const render::RenderResult result = reference ? render::renderReference(scene, referenceSettings, quiet)
+                                                          : render::renderScene(scene, renderSettings, quiet);
             // The image, its preview and its stats all or none (commitAll).
             AtomicOutputFile image(self.outputs.at("image")), preview(self.outputs.at("preview")),
                 stats(self.outputs.at("stats"));
@@ -477,6 +494,7 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                 } catch (const std::exception& e) {
                     stage.record.status = Status::Failed;
                     stage.record.message = e.what();
+                    stage.record.badInput = dynamic_cast<const InputError*>(&e) != nullptr;
                     std::lock_guard lock(logMutex);
                     log("failed  " + stage.kind + " " + stage.name + ": " + e.what());
                 }

@@ -4,6 +4,7 @@
 #include "embree_ray.h"
 
 #include <vtex/core/error.h>
+#include <vtex/core/memory_budget.h>
 
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -111,17 +113,10 @@ private:
     CellOutput& mOut;
 };
 
-std::string gib(double bytes) {
-    std::ostringstream s;
-    s.precision(3);
-    s << bytes / double(1ull << 30) << " GiB";
-    return s.str();
-}
-
 }  // namespace
 
 DeformedMesh::DeformedMesh(const std::vector<Prim>& prims, const std::vector<SurfaceRuntime>& surfaces,
-                           const std::vector<const SourceBvh*>& sources, double tolerance, double maxBytes,
+                           const std::vector<const SourceBvh*>& sources, double tolerance, std::uint64_t maxMemoryBytes,
                            const std::filesystem::path& sceneFile)
     : mSources(sources) {
     std::vector<std::size_t> cells;
@@ -139,10 +134,12 @@ DeformedMesh::DeformedMesh(const std::vector<Prim>& prims, const std::vector<Sur
         estimate += std::ceil(s.repeatU) * std::ceil(s.repeatV) * double(source.triangleCount()) * (wraps > 1 ? 1.1 : 1.0);
     }
     if (!cells.empty()) mLengthScale = lengthSum / double(cells.size());
+    const double maxBytes = maxMemoryBytes > 0 ? double(maxMemoryBytes) : std::numeric_limits<double>::infinity();
     const auto refuse = [&](double triangles) {
-        throw InputError(sceneFile, "the deformed reference needs about " + std::to_string(std::uint64_t(triangles)) +
-                                        " triangles (" + gib(triangles * kBytesPerTriangle) + "), more than the " +
-                                        gib(maxBytes) + " allowed; use --mode embedded or raise --max-memory");
+        throw MemoryLimitError(sceneFile,
+                               "the deformed reference's " + std::to_string(std::uint64_t(triangles)) +
+                                   " triangles (--mode embedded needs none)",
+                               std::uint64_t(std::min(triangles * kBytesPerTriangle, 1.8e19)), maxMemoryBytes);
     };
     if (estimate * kBytesPerTriangle > maxBytes) refuse(estimate);
 

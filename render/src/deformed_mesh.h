@@ -25,11 +25,11 @@ public:
 
     /// `sources[k]` is texel k's source (nullptr for texels no surface uses). `tolerance`: the
     /// largest distance between a triangle and the deformed surface it stands for, as a
-    /// fraction of its cell's size. Throws vtex::InputError naming `sceneFile` when the
-    /// triangles would take more than `maxBytes`: before building when the source triangles
+    /// fraction of its cell's size. Throws vtex::MemoryLimitError naming `sceneFile` when the
+    /// triangles would take more than `maxMemoryBytes` (0: no limit): before building when the source triangles
     /// alone exceed it, during subdivision otherwise (nothing large is kept either way).
     DeformedMesh(const std::vector<Prim>& prims, const std::vector<SurfaceRuntime>& surfaces,
-                 const std::vector<const SourceBvh*>& sources, double tolerance, double maxBytes,
+                 const std::vector<const SourceBvh*>& sources, double tolerance, std::uint64_t maxMemoryBytes,
                  const std::filesystem::path& sceneFile);
     ~DeformedMesh();
     DeformedMesh(const DeformedMesh&) = delete;

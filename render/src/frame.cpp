@@ -7,6 +7,7 @@
 
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <string>
 
 namespace vtex::render::detail {
@@ -156,6 +157,40 @@ double patchSize(const std::array<Vec3, 4>& p) {
     for (int i = 0; i < 4; ++i)
         for (int j = i + 1; j < 4; ++j) size = std::max(size, (p[i] - p[j]).norm());
     return size;
+}
+
+}  // namespace vtex::render::detail
+
+namespace vtex::render::detail {
+namespace {
+
+// The size of a file the scene will load (0 for one given in memory or missing: the loader
+// names a missing file itself). Read with stat, never opened here.
+double fileBytes(const std::filesystem::path& file) {
+    std::error_code ec;
+    if (file.empty()) return 0;
+    const auto size = std::filesystem::file_size(file, ec);
+    return ec ? 0.0 : double(size);
+}
+
+}  // namespace
+
+std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& options) {
+    // The factors are stated and measured in renderer.h (estimateRenderMemory).
+    const int w = options.width > 0 ? options.width : scene.camera.width;
+    const int h = options.height > 0 ? options.height : scene.camera.height;
+    double bytes = double(std::max(w, 0)) * double(std::max(h, 0)) * (options.aovs ? 28.0 : 20.0) + double(16 << 20);
+    std::vector<bool> used(scene.texels.size(), false);
+    for (const SurfaceDef& s : scene.surfaces) {
+        if (!s.meshData) bytes += 32 * fileBytes(s.mesh);
+        if (s.texel && *s.texel < used.size()) used[*s.texel] = true;
+    }
+    for (std::size_t t = 0; t < scene.texels.size(); ++t) {
+        if (!used[t]) continue;
+        if (!scene.texels[t].octree) bytes += 3 * fileBytes(scene.texels[t].volume);
+        if (!scene.texels[t].sourceData) bytes += 3 * fileBytes(scene.texels[t].source);
+    }
+    return std::uint64_t(std::min(bytes, 1.8e19));
 }
 
 }  // namespace vtex::render::detail

@@ -57,6 +57,10 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors = false)
 /// The image size a render makes (the options', else the camera's). Throws vtex::InputError.
 std::pair<int, int> imageSize(const Scene& scene, int width, int height);
 
+/// The image and the scene's files, as both renderers' estimates count them (renderer.h,
+/// estimateRenderMemory, states the factors).
+std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& options);
+
 /// Pinhole camera rays through image coordinates (px, py) ∈ [0,1]², (0,0) the top left.
 class CameraRays {
 public:

@@ -29,6 +29,9 @@ class LightTransmittanceCache {
 public:
     /// Nodes darker than this count as this dark: the optical depth stays finite (13.8).
     static constexpr double kDarkest = 1e-6;
+    /// The lattices of one render hold at most this many nodes together (256 MiB of floats);
+    /// a render whose cells would need more uses none (ShadowQueries decides before any pixel).
+    static constexpr double kMaxNodes = double(1 << 26);
     struct Grid {
         int nu = 0, nv = 0, nw = 0;  ///< lattice cells per axis; nw = 0: no grid (plain face)
         std::size_t nodes() const { return std::size_t(nu + 1) * std::size_t(nv + 1) * std::size_t(nw + 1); }

@@ -7,6 +7,7 @@
 #include <vtex/render/reference.h>
 
 #include <vtex/core/error.h>
+#include <vtex/core/memory_budget.h>
 
 #include "deformed_mesh.h"
 #include "footprint.h"
@@ -183,10 +184,16 @@ private:
 
 }  // namespace
 
+std::uint64_t estimateReferenceMemory(const Scene& scene, const ReferenceOptions& options) {
+    return detail::imageAndSceneMemory(scene, options);
+}
+
 RenderResult renderReference(const Scene& scene, const ReferenceOptions& options, Progress& progress) {
     const auto loadStart = std::chrono::steady_clock::now();
     const auto [width, height] = detail::imageSize(scene, options.width, options.height);
     const int strata = std::max(1, int(std::ceil(std::sqrt(double(std::max(options.spp, 1))))));
+    checkMemoryEstimate(scene.file, "rendering " + std::to_string(width) + "x" + std::to_string(height),
+                        estimateReferenceMemory(scene, options), options.maxMemoryBytes);
     const bool deformedMode = options.mode == ReferenceMode::Deformed;
     const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene, deformedMode);
 

@@ -9,6 +9,7 @@
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
+#include <vtex/core/memory_budget.h>
 #include <vtex/render/shading.h>
 #include <vtex/render/texel_march.h>
 
@@ -268,13 +269,31 @@ private:
     SpanMarcher mMarcher{mScene, mOptions, mShadows, mConeSpread};
 };
 
+// The shadow lattices' cap (light_cache.h) where a texel can meet a directional light: blocks are
+// allocated as cells are first queried, so the cap, not the use, is what is known before the
+// render.
+std::uint64_t latticeMemoryCap(const Scene& scene, const RenderOptions& options) {
+    if (options.approximations.shadowCacheResolution <= 0) return 0;
+    const bool directional = std::any_of(scene.lights.begin(), scene.lights.end(),
+                                         [](const Light& l) { return l.type == LightType::Directional; });
+    const bool textured = std::any_of(scene.surfaces.begin(), scene.surfaces.end(),
+                                      [](const SurfaceDef& s) { return s.texel.has_value(); });
+    return directional && textured ? std::uint64_t(detail::LightTransmittanceCache::kMaxNodes) * sizeof(float) : 0;
+}
+
 }  // namespace
+
+std::uint64_t estimateRenderMemory(const Scene& scene, const RenderOptions& options) {
+    return detail::imageAndSceneMemory(scene, options) + latticeMemoryCap(scene, options);
+}
 
 RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progress& progress) {
     const auto loadStart = std::chrono::steady_clock::now();
     RenderResult result;
     const auto [width, height] = detail::imageSize(scene, options.width, options.height);
     const int strata = std::max(1, int(std::ceil(std::sqrt(double(std::max(options.spp, 1))))));
+    checkMemoryEstimate(scene.file, "rendering " + std::to_string(width) + "x" + std::to_string(height),
+                        estimateRenderMemory(scene, options), options.maxMemoryBytes);
 
     const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene);
     // Texels referenced by some surface (the others are not loaded).

@@ -171,11 +171,10 @@ private:
                 directions.push_back(-light.direction);
         std::vector<LightTransmittanceCache::Grid> grids(mTracer.prims().size());
         // Node blocks are allocated as cells are first queried; the lattice is used only when
-        // all of them together would fit in kMaxLatticeNodes (a decision taken here, before any
+        // all of them together would fit in kMaxNodes (a decision taken here, before any
         // pixel, so that it does not depend on the order of the tiles), otherwise every query
         // casts its ray. Beyond 4 tiles of the texel across a cell, the lattice gets coarser
         // than 8 steps per tile.
-        constexpr double kMaxLatticeNodes = double(1 << 26);  // 256 MB of floats
         double total = 0;
         if (!directions.empty())
             for (std::size_t i = 0; i < grids.size(); ++i) {
@@ -186,7 +185,7 @@ private:
                 grids[i] = {across(s.repeatU), across(s.repeatV), n};
                 total += double(grids[i].nodes()) * double(directions.size());
             }
-        if (total > kMaxLatticeNodes) return {};
+        if (total > LightTransmittanceCache::kMaxNodes) return {};
         return LightTransmittanceCache(std::move(directions), std::move(grids));
     }
 

@@ -185,13 +185,9 @@ std::uint64_t estimateSampleMemory(const ingest::TriangleMesh& mesh, const Sampl
 
 octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOptions& options, Progress& progress) {
     checkOptions(options);
-    if (options.maxMemoryBytes > 0) {
-        const std::uint64_t estimate = estimateSampleMemory(mesh, options);
-        if (estimate > options.maxMemoryBytes)
-            throw MemoryLimitError("resolution " + std::to_string(options.resolution) + " needs about " +
-                                   std::to_string(estimate >> 20) + " MiB, more than the limit of " +
-                                   std::to_string(options.maxMemoryBytes >> 20) + " MiB");
-    }
+    if (options.maxMemoryBytes > 0)
+        checkMemoryEstimate(options.source, "sampling at " + std::to_string(options.resolution) + "^3",
+                            estimateSampleMemory(mesh, options), options.maxMemoryBytes);
     for (const auto& t : mesh.triangles)
         if (t[0] >= mesh.positions.size() || t[1] >= mesh.positions.size() || t[2] >= mesh.positions.size())
             throw std::invalid_argument("triangle index out of range");

@@ -3,6 +3,7 @@
 #include "fixtures.h"
 
 #include <vtex/core/error.h>
+#include <vtex/core/memory_budget.h>
 #include <vtex/octree/octree.h>
 #include <vtex/render/compare.h>
 #include <vtex/render/reference.h>
@@ -231,12 +232,14 @@ TEST(Reference, DeformedSceneOverTheMemoryLimitIsRefused) {
     addSurface(scene, gridMesh(0, 0, 1, 1, 0, 8), texel, 0.3, {100, 100});
     ReferenceOptions options;
     options.mode = ReferenceMode::Deformed;
-    options.maxMemoryBytes = 1 << 20;  // 64 cells × 10⁴ copies × 12 triangles do not fit in 1 MiB
+    // 64 cells × 10⁴ copies × 12 triangles do not fit in 64 MiB; the image and the scene do.
+    options.maxMemoryBytes = 64 << 20;
     try {
         referenceQuiet(scene, options);
-        FAIL() << "expected an InputError";
-    } catch (const vtex::InputError& e) {
+        FAIL() << "expected a MemoryLimitError";
+    } catch (const vtex::MemoryLimitError& e) {
         EXPECT_NE(std::string(e.what()).find("--mode embedded"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("triangles"), std::string::npos) << e.what();
     }
     options.mode = ReferenceMode::Embedded;  // one copy of the mesh whatever the repeat
     EXPECT_TRUE(allFinite(referenceQuiet(scene, options).image));

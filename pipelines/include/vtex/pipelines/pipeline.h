@@ -106,6 +106,10 @@ struct RunOptions {
     std::filesystem::path output;       ///< overrides Pipeline::output when not empty
     bool force = false;                 ///< redo every stage
     int jobs = 0;                       ///< stages run at once; 0 = as many as cores
+    /// The memory the stages running side by side may plan for together (core's MemoryBudget):
+    /// a stage waits while the others hold too much of it, and fails (as bad input) when its
+    /// estimate alone exceeds it. 0: no limit.
+    std::uint64_t maxMemoryBytes = 0;
     /// One line per stage event ("run texel grass", "cached …", "failed …"); may be empty.
     std::function<void(const std::string&)> log;
 };
@@ -116,6 +120,7 @@ struct StageRecord {
     std::string key;                    ///< the content hash that keys the outputs (hex)
     enum class Status { Ran, Cached, Failed, Skipped } status = Status::Skipped;
     std::string message;                ///< why it failed or was skipped
+    bool badInput = false;              ///< it failed on bad input data (vtex::InputError): exit 3
     double seconds = 0;                 ///< work time (0 when cached)
     /// The process's peak resident memory while the stage ran (0 when cached). Stages of a wave
     /// run side by side, so this is the stage's own peak plus what ran beside it.

@@ -34,9 +34,13 @@ struct ReferenceOptions : ImageOptions {
     /// Deformed: the largest distance between a subdivided triangle and the true deformed
     /// surface, as a fraction of the cell's size.
     double tolerance = 1e-3;
-    /// Deformed: refuse a scene whose deformed triangles would need more memory than this.
-    double maxMemoryBytes = 4.0 * (1ull << 30);
 };
+
+/// An upper estimate of renderReference's peak memory (bytes) before anything is loaded: the
+/// image and the scene's files as estimateRenderMemory counts them, without the shadow
+/// lattices. The deformed mode's triangles are estimated and checked once the sources are
+/// loaded.
+std::uint64_t estimateReferenceMemory(const Scene& scene, const ReferenceOptions& options);
 
 /// Loads the scene's base meshes and the source meshes of its texels (`source =`; the `.vto`
 /// supplies where the sampler placed the mesh in the unit cube), and renders. Throws

@@ -41,7 +41,12 @@ struct ImageOptions {
     int spp = 1;          ///< samples per pixel (a √spp × √spp grid, rounded up)
     int threads = 0;      ///< 0: all hardware threads
     bool aovs = false;    ///< fill Image::depth (and, texel renders, Image::level)
+    /// Refuse (vtex::MemoryLimitError, before anything is loaded) when the renderer's estimate
+    /// (estimateRenderMemory, estimateReferenceMemory) exceeds this; 0: no limit. The deformed
+    /// reference checks its triangles against it too.
+    std::uint64_t maxMemoryBytes = 0;
 };
+
 
 /// Every approximation of the texel renderer that trades error for time, in one place, each
 /// with its bound stated and tested (docs/render.md). exact() turns them all off: the render
@@ -132,6 +137,14 @@ struct RenderResult {
     RenderStats stats;
     std::vector<std::string> warnings;
 };
+
+/// An upper estimate of renderScene's peak memory (bytes), before anything is loaded: the image
+/// (20 bytes a pixel, 28 with AOVs: the RGBA floats and the encoders' copies; measured 16.7 and
+/// 24.5 on a 4096² render), what the scene loads, from its files' sizes without reading them
+/// (base meshes 32× their file, measured 16× for an OBJ grid; octrees and source meshes 3×,
+/// measured 2.2× on the bush field), and the shadow lattices' cap (256 MiB) when a texel meets a
+/// directional light. tests/cli/memory_limit_test.cpp checks it against measured peaks.
+std::uint64_t estimateRenderMemory(const Scene& scene, const RenderOptions& options);
 
 /// Loads what the scene references (meshes, octrees), builds the BVH and renders. Throws
 /// vtex::InputError for bad scene content (file named), vtex::IoError.

@@ -14,11 +14,13 @@
 /// octree-aligned blocks. Work is O(triangles + pieces), memory O(occupied voxels), parallel.
 #pragma once
 
+#include <vtex/core/memory_budget.h>
 #include <vtex/core/progress.h>
 #include <vtex/ingest/mesh.h>
 #include <vtex/octree/volume.h>
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -51,15 +53,14 @@ struct SampleOptions {
     /// Refuse (MemoryLimitError, before any work) when estimateSampleMemory() exceeds this; 0 =
     /// no limit.
     std::uint64_t maxMemoryBytes = 0;
+    /// The mesh's file, named in a MemoryLimitError.
+    std::filesystem::path source;
     /// Surface voxels on which the fit error is measured (hash-selected sample); 0 = all.
     std::uint64_t fitErrorSamples = 4096;
 };
 
-/// The resolution or the footprint would exceed the caller's memory limit.
-class MemoryLimitError : public std::runtime_error {
-public:
-    using std::runtime_error::runtime_error;
-};
+/// The resolution or the footprint would exceed the caller's memory limit (core's error, exit 3).
+using vtex::MemoryLimitError;
 
 /// An upper estimate of the peak memory sampleMesh() needs (bytes), from the triangles' areas
 /// and perimeters in voxel units: O(triangles), no allocation.
