@@ -29,8 +29,9 @@ public:
     /// A binary stream on the temporary, for writers that take a std::ostream.
     std::ostream& stream();
 
-    /// The temporary's path, for libraries that insist on opening a file name themselves
-    /// (tinygltf, OpenEXR). Do not mix with stream().
+    /// The temporary's path, for a library that insists on opening a file name itself. Do not
+    /// mix with stream(), and prefer stream(): finish() cannot see such a library's write errors
+    /// (OpenEXR's, for one, were lost when its stream closed: the EXR writer uses stream()).
     const std::filesystem::path& temporaryPath() const { return mTemporary; }
     const std::filesystem::path& target() const { return mTarget; }
 
