@@ -7,6 +7,7 @@
 #include <vtex/ingest/ingest.h>
 
 #include <cstdio>
+#include <optional>
 
 namespace vtex::cli {
 namespace {
@@ -39,14 +40,20 @@ const bool registered = registerCommand(10, [](CLI::App& app) -> Action {
                  "Drop faces with an index out of range or a NaN/Inf coordinate (counted in the "
                  "report) instead of refusing the file");
     return [flags](const GlobalOptions& global) {
-        checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
+        // Both outputs checked before any work (atomic_file.h).
+        for (const std::string& output : {flags->output, flags->report})
+            if (!output.empty()) checkOutputPath(output, {flags->input});
         TerminalProgress progress(global);
         ingest::IngestOptions options = flags->options;
         options.progress = &progress;
         ingest::IngestReport report;
         const ingest::TriangleMesh mesh = ingest::loadMesh(flags->input, options, &report);
-        ingest::writeMeshGlb(mesh, flags->output);
-        if (!flags->report.empty()) writeFileAtomically(flags->report, ingest::toJson(report));
+        // All or none (commitAll): a report that cannot be written leaves no mesh either.
+        AtomicOutputFile glb(flags->output);
+        std::optional<AtomicOutputFile> json;
+        ingest::writeMeshGlb(mesh, glb);
+        if (!flags->report.empty()) json.emplace(flags->report).stream() << ingest::toJson(report);
+        commitAll({&glb, json ? &*json : nullptr});
         for (const auto& w : report.warnings) warning(global, flags->input + ": " + w);
         char line[512];
         std::snprintf(line, sizeof line,

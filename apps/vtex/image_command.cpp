@@ -29,10 +29,12 @@ void applyImageOptions(const ImageCommandArgs& args, render::ImageOptions& optio
 }
 
 render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global) {
-    // Every output checked before any work (atomic_file.h).
-    for (const std::string& output : {args.output, args.png, args.stats})
-        if (!output.empty()) checkOutputPath(output, {args.scene});
+    // Every output checked before any work (atomic_file.h), against every file the render reads:
+    // `-o plane.obj` would replace the scene's mesh. Parsing the scene reads the scene file alone.
     render::Scene scene = render::loadScene(args.scene);
+    const std::vector<std::filesystem::path> inputs = render::sceneFiles(scene);
+    for (const std::string& output : {args.output, args.png, args.stats})
+        if (!output.empty()) checkOutputPath(output, inputs);
     for (const auto& w : scene.warnings) warning(global, w);
     return scene;
 }

@@ -28,8 +28,9 @@ struct ImageCommandArgs {
 void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::string& aovHelp);
 /// The size, threads, AOVs and memory limit the flags set (the caller sets spp: its range differs).
 void applyImageOptions(const ImageCommandArgs& args, render::ImageOptions& options);
-/// Checks every output path (checkOutputPath: a regular file or a new path, not the scene)
-/// before any work, then loads the scene and prints its warnings.
+/// Loads the scene, checks every output path before any work (checkOutputPath: a regular file
+/// or a new path, none of the files the render reads: render::sceneFiles), and prints the
+/// scene's warnings.
 render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global);
 /// The render's own warnings (those past the scene's, which loadSceneFor printed): clamped
 /// pixels, for one.

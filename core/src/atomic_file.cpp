@@ -30,6 +30,7 @@ void syncPath(const std::filesystem::path& path, bool isDirectory) {
 
 const char* kindOf(std::filesystem::file_type type) {
     switch (type) {
+    case std::filesystem::file_type::regular: return "a regular file";
     case std::filesystem::file_type::directory: return "a directory";
     case std::filesystem::file_type::fifo: return "a FIFO";
     case std::filesystem::file_type::character: return "a character device";
@@ -37,6 +38,15 @@ const char* kindOf(std::filesystem::file_type type) {
     case std::filesystem::file_type::socket: return "a socket";
     default: return "not a regular file";
     }
+}
+
+// The output is one of the command's inputs, links followed (st_dev and st_ino, through
+// filesystem::equivalent): writing it would replace what the command reads.
+void refuseOwnInput(const std::filesystem::path& target, const std::vector<std::filesystem::path>& inputs) {
+    std::error_code error;
+    for (const auto& input : inputs)
+        if (!input.empty() && std::filesystem::equivalent(target, input, error))
+            throw InputError(target, "output is the command's own input " + input.string());
 }
 
 }  // namespace
@@ -48,9 +58,17 @@ void checkOutputPath(const std::filesystem::path& target, const std::vector<std:
     if (status.type() != std::filesystem::file_type::regular)
         throw InputError(target, std::string("output is ") + kindOf(status.type()) +
                                      ": vtex writes only regular files or new paths");
-    for (const auto& input : inputs)
-        if (!input.empty() && std::filesystem::equivalent(target, input, error))
-            throw InputError(target, "output is the command's own input " + input.string());
+    refuseOwnInput(target, inputs);
+}
+
+void checkOutputFolder(const std::filesystem::path& folder, const std::vector<std::filesystem::path>& inputs) {
+    std::error_code error;
+    const auto status = std::filesystem::status(folder, error);
+    if (error || !std::filesystem::exists(status)) return;  // a new folder
+    refuseOwnInput(folder, inputs);  // before the kind: "its own input" says more than "a regular file"
+    if (status.type() != std::filesystem::file_type::directory)
+        throw InputError(folder, std::string("output folder is ") + kindOf(status.type()) +
+                                     ": vtex writes into a directory or makes a new one");
 }
 
 AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::move(target)) {

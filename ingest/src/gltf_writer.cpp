@@ -182,8 +182,14 @@ std::string encodeMeshGlb(const TriangleMesh& mesh) {
 }
 
 void writeMeshGlb(const TriangleMesh& mesh, const std::filesystem::path& file) {
+    AtomicOutputFile out(file);
+    writeMeshGlb(mesh, out);
+    out.commit();
+}
+
+void writeMeshGlb(const TriangleMesh& mesh, AtomicOutputFile& out) {
     const std::string bytes = encodeMeshGlb(mesh);
-    writeFileAtomically(file, bytes);
+    out.stream().write(bytes.data(), std::streamsize(bytes.size()));
 }
 
 }  // namespace vtex::ingest

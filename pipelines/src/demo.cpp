@@ -79,6 +79,8 @@ void writeScene(const fs::path& file, const std::string& title, const Shot& shot
 }  // namespace
 
 RunReport runDemo(const DemoOptions& options) {
+    // The inputs are written before runPipeline() checks the folder: checked here first.
+    checkOutputFolder(options.outputDirectory);
     const fs::path inputs = options.outputDirectory / "inputs";
     std::error_code error;
     fs::create_directories(inputs, error);

@@ -155,6 +155,8 @@ bool RunReport::succeeded() const {
 RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     const fs::path root = options.output.empty() ? pipeline.output : options.output;
+    // Before any folder is made: `-o` a FIFO, a device, a file or the pipeline itself is bad input.
+    checkOutputFolder(root, {pipeline.file});
     for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
         std::error_code error;
         fs::create_directories(root / folder, error);

@@ -10,11 +10,14 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 
 #include <algorithm>
 #include <cmath>
+#include <ostream>
+#include <stdexcept>
 
 namespace vtex::render {
 
@@ -31,6 +34,28 @@ void writeExr(const Image& image, const std::filesystem::path& file) {
     writeExr(image, out);
     out.commit();
 }
+
+namespace {
+
+// OpenEXR writes into the atomic output's own stream, whose failures AtomicOutputFile::finish()
+// sees. Given the temporary's name instead, OpenEXR's file stream dropped the error of its last
+// flush when it closed: on a full disk an empty EXR was committed and render exited 0.
+class ExrOutput final : public Imf::OStream {
+public:
+    ExrOutput(std::ostream& out, const std::filesystem::path& target) : Imf::OStream(target.c_str()), mOut(out) {}
+    void write(const char c[], int n) override {
+        if (!mOut.write(c, n)) throw std::runtime_error("write failed (disk full?)");
+    }
+    std::uint64_t tellp() override { return std::uint64_t(mOut.tellp()); }
+    void seekp(std::uint64_t pos) override {
+        if (!mOut.seekp(std::streamoff(pos))) throw std::runtime_error("seek failed");
+    }
+
+private:
+    std::ostream& mOut;
+};
+
+}  // namespace
 
 void writeExr(const Image& image, AtomicOutputFile& out) {
     const std::filesystem::path& file = out.target();
@@ -53,7 +78,8 @@ void writeExr(const Image& image, AtomicOutputFile& out) {
             frame.insert("level", Imf::Slice(Imf::FLOAT, (char*)image.level.data(), sizeof(float),
                                              sizeof(float) * std::size_t(image.width)));
         }
-        Imf::OutputFile exr(out.temporaryPath().c_str(), header);
+        ExrOutput stream(out.stream(), file);
+        Imf::OutputFile exr(stream, header);
         exr.setFrameBuffer(frame);
         exr.writePixels(image.height);
     } catch (const std::exception& e) {

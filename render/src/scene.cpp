@@ -174,4 +174,15 @@ Scene loadScene(const std::filesystem::path& file) {
     return parseScene(readInputFile(file, std::uint64_t(64) << 20, "scene file"), file);
 }
 
+std::vector<std::filesystem::path> sceneFiles(const Scene& scene) {
+    std::vector<std::filesystem::path> files = {scene.file};
+    for (const SurfaceDef& surface : scene.surfaces) files.push_back(surface.mesh);
+    for (const TexelDef& texel : scene.texels) {
+        files.push_back(texel.volume);
+        files.push_back(texel.source);
+    }
+    std::erase_if(files, [](const std::filesystem::path& file) { return file.empty(); });
+    return files;
+}
+
 }  // namespace vtex::render

@@ -86,3 +86,24 @@ TEST(AtomicOutputFile, TheFileGetsTheUsersUmaskNotPrivateMode) {
     EXPECT_EQ(permissions, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
                                fs::perms::others_read);
 }
+
+// An output folder is a directory (a link to one is that directory) or a new path; a file, a
+// FIFO or the command's own input in its place is bad input, not an I/O failure.
+TEST(CheckOutputFolder, ADirectoryALinkToOneOrANewPathIsAcceptedAnythingElseRefused) {
+    const fs::path dir = freshDirectory("output_folder");
+    fs::create_directories(dir / "folder");
+    fs::create_directory_symlink(dir / "folder", dir / "link");
+    std::ofstream(dir / "pipeline.toml") << "x";
+    ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+    EXPECT_NO_THROW(vtex::checkOutputFolder(dir / "folder", {dir / "pipeline.toml"}));
+    EXPECT_NO_THROW(vtex::checkOutputFolder(dir / "link", {dir / "pipeline.toml"}));
+    EXPECT_NO_THROW(vtex::checkOutputFolder(dir / "new", {dir / "pipeline.toml"}));
+    EXPECT_THROW(vtex::checkOutputFolder(dir / "fifo"), vtex::InputError);
+    EXPECT_THROW(vtex::checkOutputFolder(dir / "pipeline.toml"), vtex::InputError);
+    try {
+        vtex::checkOutputFolder(dir / "pipeline.toml", {dir / "pipeline.toml"});
+        ADD_FAILURE() << "the pipeline file was accepted as its own output folder";
+    } catch (const vtex::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("own input"), std::string::npos) << e.what();
+    }
+}

@@ -20,6 +20,7 @@
 #include <vector>
 
 namespace vtex {
+class AtomicOutputFile;
 class Progress;
 }
 
@@ -95,6 +96,8 @@ TriangleMesh loadMesh(const std::filesystem::path& file, const IngestOptions& op
 /// normals and (if any) UVs shared by one indexed TRIANGLES primitive per material, base-colour
 /// textures embedded as PNG. Any glTF viewer opens it. Throws vtex::IoError.
 void writeMeshGlb(const TriangleMesh& mesh, const std::filesystem::path& file);
+/// The same into an output the caller commits (commitAll: several outputs all or none).
+void writeMeshGlb(const TriangleMesh& mesh, AtomicOutputFile& out);
 
 /// The .glb bytes writeMeshGlb() would write (for tests and in-memory pipelines).
 std::string encodeMeshGlb(const TriangleMesh& mesh);

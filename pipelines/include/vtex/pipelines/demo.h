@@ -35,8 +35,9 @@ struct DemoOptions {
     RunOptions run;                     ///< log, jobs (the output and force fields are set from the above)
 };
 
-/// Writes the demo's inputs and runs them. Throws vtex::IoError when the output directory cannot
-/// be written; returns the pipeline's report (check succeeded()).
+/// Writes the demo's inputs and runs them. Throws vtex::InputError, before anything is written,
+/// when the output folder exists and is not a directory (checkOutputFolder), vtex::IoError when
+/// it cannot be written; returns the pipeline's report (check succeeded()).
 RunReport runDemo(const DemoOptions& options);
 
 /// The human summary printed by `vtex demo`.

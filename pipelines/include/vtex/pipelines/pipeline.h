@@ -152,7 +152,8 @@ struct RunReport {
 /// Runs the pipeline. Writes report.json and report.html whatever happens; a failed stage stops
 /// the stages that depend on it and leaves the others' outputs valid. Returns the report; the
 /// caller decides the exit status from RunReport::succeeded() (the first failure's message is in
-/// its record). Throws vtex::IoError when the output directory cannot be written.
+/// its record). Throws vtex::InputError, before anything is made, when the output folder exists
+/// and is not a directory (checkOutputFolder), vtex::IoError when it cannot be written.
 RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options);
 
 }  // namespace vtex::pipelines

@@ -96,4 +96,8 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file);
 /// Reads and parses a scene file. Throws vtex::InputError / vtex::IoError.
 Scene loadScene(const std::filesystem::path& file);
 
+/// Every file a render of `scene` may read: the scene file, each surface's mesh, each texel's
+/// volume and source (empty paths left out). What a command checks its outputs against.
+std::vector<std::filesystem::path> sceneFiles(const Scene& scene);
+
 }  // namespace vtex::render
