@@ -1,5 +1,6 @@
 #include "cli.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/core/memory_budget.h>
 #include "registry.h"
 
@@ -66,6 +67,19 @@ CLI::Validator finiteNumber() {
             return {};
         },
         "NUMBER");
+}
+
+void checkOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                  const std::vector<std::filesystem::path>& inputs) {
+    std::vector<std::pair<std::string, std::filesystem::path>> seen;
+    for (const auto& [flag, path] : outputs) {
+        if (path.empty()) continue;
+        const std::filesystem::path normal = std::filesystem::absolute(path).lexically_normal();
+        for (const auto& [other, earlier] : seen)
+            if (earlier == normal) throw CLI::ValidationError(other + " and " + flag, "name the same file " + path);
+        seen.emplace_back(flag, normal);
+        checkOutputPath(path, inputs);
+    }
 }
 
 CLI::Validator powerOfTwo(unsigned long long largest) {

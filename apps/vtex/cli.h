@@ -18,6 +18,8 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace vtex::cli {
 
@@ -62,6 +64,12 @@ CLI::Validator finiteNumber();
 /// with its estimate (exit 3) instead of running into the kernel's OOM killer. `work` says what
 /// is estimated ("the sampler's footprint").
 CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::string& work);
+
+/// A command's output files, each as (flag, path), checked before any work: every non-empty
+/// path with checkOutputPath against `inputs` (exit 3), and no two flags naming one file (bad
+/// usage, exit 2: `-o a.exr --png a.exr` would write both and keep the second).
+void checkOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
+                  const std::vector<std::filesystem::path>& inputs);
 
 /// Accepts a power of two from 1 to `largest` (voxel resolutions).
 CLI::Validator powerOfTwo(unsigned long long largest);

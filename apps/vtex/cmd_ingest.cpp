@@ -41,8 +41,7 @@ const bool registered = registerCommand(10, [](CLI::App& app) -> Action {
                  "report) instead of refusing the file");
     return [flags](const GlobalOptions& global) {
         // Both outputs checked before any work (atomic_file.h).
-        for (const std::string& output : {flags->output, flags->report})
-            if (!output.empty()) checkOutputPath(output, {flags->input});
+        checkOutputs({{"-o", flags->output}, {"--report", flags->report}}, {flags->input});
         TerminalProgress progress(global);
         ingest::IngestOptions options = flags->options;
         options.progress = &progress;

@@ -33,8 +33,7 @@ render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& gl
     // `-o plane.obj` would replace the scene's mesh. Parsing the scene reads the scene file alone.
     render::Scene scene = render::loadScene(args.scene);
     const std::vector<std::filesystem::path> inputs = render::sceneFiles(scene);
-    for (const std::string& output : {args.output, args.png, args.stats})
-        if (!output.empty()) checkOutputPath(output, inputs);
+    checkOutputs({{"-o", args.output}, {"--png", args.png}, {"--stats", args.stats}}, inputs);
     for (const auto& w : scene.warnings) warning(global, w);
     return scene;
 }

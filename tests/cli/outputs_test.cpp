@@ -82,3 +82,23 @@ TEST(Outputs, ACommandWritesAllItsOutputsOrNone) {
     EXPECT_FALSE(fs::exists(exr)) << "the EXR was left without its PNG";
     EXPECT_FALSE(fs::exists(s.dir / "y.json"));
 }
+
+// Two output flags naming one file (`-o a.exr --png a.exr`, written as "./a.exr" too) would
+// write both and keep the second: bad usage, refused before any work with both flags named.
+TEST(Outputs, TwoOutputFlagsNamingOneFileAreBadUsage) {
+    const Specials s = makeSpecials("same_file");
+    const fs::path scene = s.dir / "scene.toml";
+    std::ofstream(s.dir / "plane.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    std::ofstream(scene) << "[camera]\nposition = [0.5, -2, 1.5]\nlook_at = [0.5, 0.5, 0]\nwidth = 8\nheight = 6\n"
+                            "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n"
+                            "[[surface]]\nmesh = \"plane.obj\"\n";
+    const std::string a = (s.dir / "a.out").string(), again = (s.dir / "." / "a.out").string();
+    for (const std::vector<std::string>& args : {std::vector<std::string>{"render", scene.string(), "-o", a, "--png", again},
+                                                 {"reference", scene.string(), "-o", a, "--stats", a},
+                                                 {"ingest", (s.dir / "plane.obj").string(), "-o", a, "--report", again}}) {
+        const auto r = runVtex(args);
+        EXPECT_EQ(r.exitStatus, 2) << args[0] << ": " << r.err;
+        EXPECT_NE(r.err.find("name the same file"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(a)) << args[0];
+    }
+}
