@@ -1,13 +1,17 @@
 // `vtex build leaves.vtl -o texel.vto [--filter neyret|sggx] [--tolerance E]`: every level,
 // filtered and compressed (octree library).
 #include "cli.h"
+#include "fidelity_report.h"
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/memory_budget.h>
+#include <vtex/ingest/ingest.h>
 #include <vtex/octree/octree.h>
+#include <vtex/render/source_visibility.h>
 
 #include <chrono>
 #include <cstdio>
+#include <iostream>
 
 namespace vtex::cli {
 namespace {
@@ -24,6 +28,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         double tolerance = 0;
         std::uint64_t filterErrorSamples = 4096;
         std::uint64_t maxMemory = 0;
+        std::string source;
     };
     auto flags = std::make_shared<Flags>();
     app.add_option("VOLUME", flags->input, "Sampled volume (.vtl)")->required();
@@ -43,8 +48,11 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
                    "Nodes per level on which the filter error is measured (0 = all)")
         ->capture_default_str();
     addMaxMemoryOption(app, flags->maxMemory, "reading the volume and building its octree");
+    app.add_option("--source", flags->source,
+                   "The mesh the volume was sampled from: report each level's transmittance against it along "
+                   "chords of the texel and over beams of the level (as vtex inspect --source)");
     return [flags](const GlobalOptions& global) {
-        checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
+        checkOutputPath(flags->output, {flags->input, flags->source});  // before any work (atomic_file.h)
         checkMemoryEstimate(flags->input, "building its octree", octree::estimateBuildMemory(flags->input),
                             flags->maxMemory);
         const auto start = std::chrono::steady_clock::now();
@@ -62,6 +70,8 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
                       flags->input.c_str(), tree.levelCount(), (unsigned long long)tree.storedNodes(),
                       100.0 * tree.compression(), seconds, flags->output.c_str());
         status(global, line);
+        if (!flags->source.empty() && global.verbosity() != Verbosity::Quiet)
+            printFidelity(render::measureSourceFidelity(tree, ingest::loadMesh(flags->source)), flags->source, std::cerr);
     };
 });
 

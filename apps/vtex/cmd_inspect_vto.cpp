@@ -1,6 +1,7 @@
 // `vtex inspect texel.vto [--json] [--source mesh.glb]`: what an octree holds, level by level, and
 // with its source what each level lets through against the mesh.
 #include "cli.h"
+#include "fidelity_report.h"
 #include "inspect_checksums.h"
 
 #include <vtex/core/error.h>
@@ -22,14 +23,10 @@ namespace {
 // JSON has no NaN or infinity.
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-// Per level, the chord transmittance against the source mesh (octree/chord_transmittance.h);
-// empty without a source.
-std::vector<octree::ChordTransmittance> chordsAgainstSource(const octree::Octree& tree, const std::filesystem::path& source) {
+// Per level, against the source mesh (render::measureSourceFidelity); empty without a source.
+render::SourceFidelity measuresAgainstSource(const octree::Octree& tree, const std::filesystem::path& source) {
     if (source.empty()) return {};
-    const ingest::TriangleMesh mesh = ingest::loadMesh(source);
-    const render::SourceVisibility visibility(mesh, tree.info.source);
-    return octree::measureChordTransmittance(
-        tree, [&](const octree::Vec3& a, const octree::Vec3& b) { return visibility.visible(a, b); });
+    return render::measureSourceFidelity(tree, ingest::loadMesh(source));
 }
 
 void inspectVto(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out) {
@@ -42,18 +39,13 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
     }
     const octree::Octree tree = octree::parseVto(bytes, file);  // throws on any problem
     const auto& info = tree.info;
-    const auto chords = chordsAgainstSource(tree, options.source);
+    const render::SourceFidelity measures = measuresAgainstSource(tree, options.source);
     if (json) {
         nlohmann::json levels = nlohmann::json::array();
         for (std::uint32_t l = 0; l < tree.levelCount(); ++l) {
             const auto& s = tree.stats[l];
-            nlohmann::json chord = nullptr;
-            if (!chords.empty())
-                chord = {{"visibility", number(chords[l].visibility)},
-                         {"transmittance", number(chords[l].transmittance)},
-                         {"error", number(chords[l].error())}};
             levels.push_back({{"level", l},
-                              {"chords_against_source", chord},
+                              {"chords_against_source", fidelityJson(measures, l)},
                               {"resolution", 1u << l},
                               {"stored_nodes", s.storedNodes},
                               {"occupied_nodes", s.occupiedNodes},
@@ -105,15 +97,7 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                       (unsigned long long)s.filterErrorSamples);
         out << line;
     }
-    if (!chords.empty()) {
-        out << "against the source " << options.source.string() << ", " << "4096 random chords of the texel:\n"
-            << "level  missing the mesh  level's transmittance  error (> 0: lets more through)\n";
-        for (std::uint32_t l = 0; l < tree.levelCount(); ++l) {
-            std::snprintf(line, sizeof line, "%5u %17.4f %22.4f %+10.4f\n", l, chords[l].visibility, chords[l].transmittance,
-                          chords[l].error());
-            out << line;
-        }
-    }
+    printFidelity(measures, options.source, out);
     printChecksums(check, out);
 }
 

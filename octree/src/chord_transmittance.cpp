@@ -136,4 +136,89 @@ std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, co
     return out;
 }
 
+namespace {
+
+struct Beam {
+    Vec3 origin, direction, across, up;  ///< a corner of the cross-section; its two edge directions
+    double length = 0, side = 0;
+};
+
+// A beam of `level` (see BeamError): a uniform direction, then a corner drawn uniformly in the
+// cube until the whole bundle (the four corners of both end squares) lies inside it.
+Beam randomBeam(std::uint32_t level, ChordRng& rng) {
+    const double h = std::ldexp(1.0, -int(level));
+    Beam beam;
+    beam.length = std::min(4 * h, 0.5);
+    beam.side = std::min(h, 0.25);
+    const double z = 2 * rng.next() - 1, phi = 2 * std::numbers::pi * rng.next();
+    const double r = std::sqrt(std::max(0.0, 1 - z * z));
+    beam.direction = Vec3(r * std::cos(phi), r * std::sin(phi), z);
+    beam.across = beam.direction.unitOrthogonal();
+    beam.up = beam.direction.cross(beam.across);
+    const auto inside = [](const Vec3& p) { return (p.array() >= 0.0).all() && (p.array() <= 1.0).all(); };
+    for (int attempt = 0; attempt < 10000; ++attempt) {
+        beam.origin = Vec3(rng.next(), rng.next(), rng.next());
+        bool fits = true;
+        for (int c = 0; c < 8 && fits; ++c)
+            fits = inside(beam.origin + (c & 1 ? beam.side : 0.0) * beam.across + (c & 2 ? beam.side : 0.0) * beam.up +
+                          (c & 4 ? beam.length : 0.0) * beam.direction);
+        if (fits) return beam;
+    }
+    beam.length = 0;  // cannot happen for length ≤ 0.5 and side ≤ 0.25; an empty beam counts nothing
+    return beam;
+}
+
+double percentile95(std::vector<double> values) {
+    if (values.empty()) return 0;
+    const std::size_t k = std::min(values.size() - 1, std::size_t(std::ceil(0.95 * double(values.size()))) - 1);
+    std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(k), values.end());
+    return values[k];
+}
+
+}  // namespace
+
+std::vector<BeamError> measureBeamTransmittance(const Octree& tree, const ChordVisibility& visible, double tau,
+                                                int beams, int chordsPerBeam, std::uint64_t seed) {
+    std::vector<BeamError> out(tree.levels.size());
+    const int grid = int(std::sqrt(double(std::max(chordsPerBeam, 1))));
+    if (beams <= 0 || grid <= 0) return out;
+    for (std::size_t level = 0; level < tree.levels.size(); ++level) {
+        std::vector<double> error(std::size_t(beams), 0.0), noise(std::size_t(beams), 0.0);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, std::size_t(beams), 4), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t j = r.begin(); j != r.end(); ++j) {
+                ChordRng rng{mix64(seed ^ mix64(0xBEA3ull + 0x9E37ull * level + (std::uint64_t(j) << 20)))};
+                const Beam beam = randomBeam(std::uint32_t(level), rng);
+                if (!(beam.length > 0)) continue;
+                double missing = 0, transmitted = 0;
+                for (int u = 0; u < grid; ++u)
+                    for (int v = 0; v < grid; ++v) {
+                        // Stratified: one jittered chord per cell of the cross-section's grid.
+                        const Vec3 a = beam.origin + beam.side * ((u + rng.next()) / grid) * beam.across +
+                                       beam.side * ((v + rng.next()) / grid) * beam.up;
+                        const Vec3 b = a + beam.length * beam.direction;
+                        missing += visible(a, b) ? 1 : 0;
+                        transmitted += std::exp(-tau * chordDepth(tree, std::uint32_t(level), a, b));
+                    }
+                const double n = double(grid) * double(grid), f = missing / n;
+                error[j] = transmitted / n - f;
+                noise[j] = std::sqrt(f * (1 - f) / n);
+            }
+        });
+        BeamError e;
+        std::vector<double> magnitude(error.size());
+        for (std::size_t j = 0; j < error.size(); ++j) {  // in beam order: the same whatever the schedule
+            e.mean += error[j];
+            e.meanAbs += std::abs(error[j]);
+            e.noise += noise[j];
+            magnitude[j] = std::abs(error[j]);
+        }
+        e.mean /= double(beams);
+        e.meanAbs /= double(beams);
+        e.noise /= double(beams);
+        e.p95Abs = percentile95(std::move(magnitude));
+        out[level] = e;
+    }
+    return out;
+}
+
 }  // namespace vtex::octree

@@ -14,6 +14,7 @@
 #include <vtex/render/reference.h>
 #include <vtex/render/renderer.h>
 #include <vtex/render/scene.h>
+#include <vtex/render/source_visibility.h>
 #include <vtex/sampler/patterns.h>
 #include <vtex/sampler/sampler.h>
 
@@ -306,11 +307,14 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         const std::size_t sampleStage = b.inputs[0];
         b.describe = [&stages, step, sampleStage, header] {
             std::ostringstream d;
+            // The source too: the stage measures each level against it (its details).
             d << header << "build\nfilter " << step.filter << " tolerance " << step.tolerance << "\nvolume "
-              << stages[sampleStage].outputHashes.at("volume") << "\n";
+              << stages[sampleStage].outputHashes.at("volume") << "\nsource "
+              << stages[stages[sampleStage].inputs[0]].outputHashes.at("mesh") << "\n";
             return d.str();
         };
         b.run = [&stages, &budget, step, sampleStage](Stage& self) {
+            const fs::path sourceFile = stages[stages[sampleStage].inputs[0]].outputs.at("mesh");
             const fs::path volumeFile = stages[sampleStage].outputs.at("volume");
             const auto held = budget.reserve(volumeFile, "building its octree", octree::estimateBuildMemory(volumeFile));
             const octree::SparseVolume volume = octree::readVtl(volumeFile);
@@ -320,11 +324,16 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             NullProgress quiet;
             const octree::Octree tree = octree::buildOctree(volume, o, quiet);
             octree::writeVto(tree, self.outputs.at("octree"));
+            // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
+            const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, ingest::loadMesh(sourceFile));
             Json levels = Json::array();
             for (std::uint32_t l = 0; l < tree.levelCount(); ++l)
                 levels.push_back({{"level", l},
                                   {"stored_nodes", tree.stats[l].storedNodes},
-                                  {"filter_error_mean", tree.stats[l].filterErrorMean}});
+                                  {"filter_error_mean", tree.stats[l].filterErrorMean},
+                                  {"chord_error", fidelity.chords[l].error()},
+                                  {"beam_error_mean_abs", fidelity.beams[l].meanAbs},
+                                  {"beam_error_p95_abs", fidelity.beams[l].p95Abs}});
             return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels}};
         };
     }

@@ -155,6 +155,12 @@ TEST(Pipeline, RunsEndToEndThenEverythingIsCached) {
     }
     const auto metrics = nlohmann::json::parse(vtex::test::readText(dir / "out/compares/grass-vs-cross.json"));
     EXPECT_GT(metrics["rmse"].get<double>(), 0) << "two different texels render differently";
+    // Each build reports its levels' fidelity to the source (issue 13's measure).
+    const auto build = nlohmann::json::parse(vtex::test::readText(dir / "out/builds/grass.manifest.json"));
+    for (const auto& level : build["details"]["levels"]) {
+        EXPECT_GE(level["beam_error_p95_abs"].get<double>(), level["beam_error_mean_abs"].get<double>() * 0.5) << level;
+        EXPECT_LE(std::abs(level["chord_error"].get<double>()), 1.0) << level;
+    }
 
     const RunReport second = run(dir);
     ASSERT_TRUE(second.succeeded());

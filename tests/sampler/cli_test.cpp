@@ -63,6 +63,13 @@ TEST(SamplerCli, InspectMeasuresEachLevelAgainstTheSource) {
         EXPECT_GT(c["transmittance"].get<double>(), 0.0);
         EXPECT_LE(c["transmittance"].get<double>(), 1.0);
         EXPECT_NEAR(c["error"].get<double>(), c["transmittance"].get<double>() - visibility, 1e-12);
+        // Over beams of the level: |mean| ≤ mean |error| ≤ p95-ish bounds, noise a valid SE.
+        const auto& b = c["beams"];
+        EXPECT_LE(std::abs(b["mean"].get<double>()), b["mean_abs"].get<double>() + 1e-12);
+        EXPECT_GE(b["p95_abs"].get<double>(), 0.0);
+        EXPECT_LE(b["p95_abs"].get<double>(), 1.0);
+        EXPECT_GE(b["noise"].get<double>(), 0.0);
+        EXPECT_LE(b["noise"].get<double>(), 0.5 / 16 + 1e-12);  // 0.5/√256
     }
     EXPECT_LT(levels[0]["chords_against_source"]["error"].get<double>(), -0.1);
     EXPECT_LT(levels[3]["chords_against_source"]["error"].get<double>(), -0.02);
@@ -71,6 +78,10 @@ TEST(SamplerCli, InspectMeasuresEachLevelAgainstTheSource) {
     r = runVtex({"inspect", vto.string(), "--source", glb.string()});
     ASSERT_EQ(r.exitStatus, 0) << r.err;
     EXPECT_NE(r.out.find("against the source"), std::string::npos);
+    // The build reports the same table when given the source.
+    const auto built = runVtex({"build", vtl.string(), "-o", tmp("chords2.vto").string(), "--source", glb.string()});
+    ASSERT_EQ(built.exitStatus, 0) << built.err;
+    EXPECT_NE(built.err.find("against the source"), std::string::npos) << built.err;
     EXPECT_EQ(runVtex({"inspect", vtl.string(), "--source", glb.string()}).exitStatus, 2);
     EXPECT_EQ(runVtex({"inspect", vto.string(), "--source", tmp("missing.glb").string()}).exitStatus, 3);
 }

@@ -41,6 +41,26 @@ struct ChordTransmittance {
 std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
                                                           double tau = 1, int chords = 4096, std::uint64_t seed = 1);
 
+/// One level over multi-voxel beams (the scale at which a fit of the level would be judged,
+/// Vicini, Jakob & Kaplanyan 2021): a beam is a bundle of parallel chords on a stratified grid
+/// over a square cross-section one voxel of the level across, four voxels long (at most half
+/// the texel), in a uniform random direction, placed uniformly where the whole bundle lies
+/// inside the unit cube. A beam's error is the mean model transmittance of its chords minus the
+/// fraction of them that miss the source.
+struct BeamError {
+    double mean = 0;     ///< signed mean over the beams (> 0: the level lets through too much)
+    double meanAbs = 0;  ///< mean |error|
+    double p95Abs = 0;   ///< 95th percentile of |error|
+    /// Mean binomial standard error of a beam's missing fraction, √(f(1−f)/chords): the
+    /// sampling noise in meanAbs and p95Abs (an upper bound: the grid is stratified).
+    double noise = 0;
+};
+
+/// Every level of `tree`, `beams` beams of `chordsPerBeam` chords each (rounded down to a
+/// square); a pure function of `seed`, whatever the thread count.
+std::vector<BeamError> measureBeamTransmittance(const Octree& tree, const ChordVisibility& visible, double tau = 1,
+                                                int beams = 256, int chordsPerBeam = 256, std::uint64_t seed = 1);
+
 /// Visits the non-empty voxels of `level` that the segment a → b (inside the unit cube) crosses,
 /// front to back, as visit(node found, t0, t1) with [t0, t1] the distances from a along the
 /// segment (an exact Amanatides–Woo walk; a leaf above the level stands for its voxels).

@@ -1,0 +1,41 @@
+#include "fidelity_report.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace vtex::cli {
+namespace {
+
+// JSON has no NaN or infinity.
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+nlohmann::json fidelityJson(const render::SourceFidelity& m, std::uint32_t l) {
+    if (m.chords.empty()) return nullptr;
+    const auto& c = m.chords[l];
+    const auto& b = m.beams[l];
+    return {{"visibility", number(c.visibility)},
+            {"transmittance", number(c.transmittance)},
+            {"error", number(c.error())},
+            {"beams", {{"mean", number(b.mean)}, {"mean_abs", number(b.meanAbs)}, {"p95_abs", number(b.p95Abs)},
+                       {"noise", number(b.noise)}}}};
+}
+
+void printFidelity(const render::SourceFidelity& m, const std::filesystem::path& source, std::ostream& out) {
+    if (m.chords.empty()) return;
+    out << "against the source " << source.string() << ": 4096 random chords of the texel; 256 beams per level "
+        << "(256 parallel chords, 1 voxel across, 4 long)\n"
+        << "level  missing the mesh  level's transmittance  error (> 0: lets more through)  beams: mean  |mean|  p95 "
+           "(noise)\n";
+    char line[256];
+    for (std::size_t l = 0; l < m.chords.size(); ++l) {
+        const auto& c = m.chords[l];
+        const auto& b = m.beams[l];
+        std::snprintf(line, sizeof line, "%5zu %17.4f %22.4f %+10.4f %+33.4f %7.4f %7.4f (%.4f)\n", l, c.visibility,
+                      c.transmittance, c.error(), b.mean, b.meanAbs, b.p95Abs, b.noise);
+        out << line;
+    }
+}
+
+}  // namespace vtex::cli
