@@ -18,6 +18,7 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         bool force = false;
         int jobs = 0;
         std::uint64_t maxMemory = 0;
+        bool wait = false;
     };
     auto o = std::make_shared<Options>();
     app.add_option("PIPELINE", o->file, "The pipeline file (.toml)")->required();
@@ -25,6 +26,7 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
     app.add_flag("--force", o->force, "Redo every stage, cached or not");
     app.add_option("--jobs", o->jobs, "Stages run at once (0: as many as cores)")->check(CLI::Range(0, 1024));
     addMaxMemoryOption(app, o->maxMemory, "a stage, together with those running beside it,");
+    app.add_flag("--wait", o->wait, "When another run holds the output folder, wait until it ends (default: refuse)");
     return [o](const GlobalOptions& global) {
         const pipelines::Pipeline pipeline = pipelines::loadPipeline(o->file);
         for (const auto& w : pipeline.warnings) warning(global, w);
@@ -33,6 +35,7 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         options.force = o->force;
         options.jobs = o->jobs;
         options.maxMemoryBytes = o->maxMemory;
+        options.waitForLock = o->wait;
         options.log = [&global](const std::string& line) { status(global, line); };
         const pipelines::RunReport report = pipelines::runPipeline(pipeline, options);
         for (const auto& omission : report.leftOut) status(global, "left out: texel " + omission.texel + ": " + omission.reason);

@@ -1,5 +1,7 @@
 #include <vtex/core/atomic_file.h>
+
 #include <vtex/core/error.h>
+#include <vtex/core/folder_lock.h>
 
 #include <atomic>
 #include <cerrno>
@@ -87,11 +89,20 @@ AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::
     static std::atomic<unsigned> counter{0};
     std::random_device entropy;
     for (int attempt = 0; attempt < 100; ++attempt) {
+        // Named after its writer (host and pid, FolderLock::holderName): on a shared folder the
+        // temporaries of a live writer elsewhere are told from a dead one's.
+        static const std::string writer = [] {
+            std::string name = FolderLock::holderName();
+            for (char& c : name)
+                if (c == ':' || c == '/') c = '.';
+            return name;
+        }();
         char suffix[32];
-        std::snprintf(suffix, sizeof suffix, ".tmp.%d.%u.%08x", int(::getpid()), counter.fetch_add(1),
-                      unsigned(entropy()));
+        std::snprintf(suffix, sizeof suffix, ".%u.%08x", counter.fetch_add(1), unsigned(entropy()));
         std::string name = ".";
         name += mTarget.filename().string();
+        name += ".tmp.";
+        name += writer;
         name += suffix;
         const std::filesystem::path candidate = directory / name;
         const int fd = ::open(candidate.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0666);

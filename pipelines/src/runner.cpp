@@ -4,6 +4,7 @@
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
+#include <vtex/core/folder_lock.h>
 #include <vtex/core/memory_budget.h>
 #include <vtex/core/version.h>
 #include <vtex/ingest/ingest.h>
@@ -158,12 +159,17 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     const fs::path root = options.output.empty() ? pipeline.output : options.output;
     // Before any folder is made: `-o` a FIFO, a device, a file or the pipeline itself is bad input.
     checkOutputFolder(root, {pipeline.file});
+    std::error_code made;
+    fs::create_directories(root, made);
+    if (made) throw IoError(root, "cannot create the output directory: " + made.message());
+    // One run per output folder (folder_lock.h): held until this run returns.
+    const FolderLock lock(root, options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse);
     for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
         std::error_code error;
         fs::create_directories(root / folder, error);
         if (error) throw IoError(root / folder, "cannot create the output directory: " + error.message());
-        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; no run writes
-        // them now (one run per output directory at a time), so they can go.
+        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; holding the
+        // folder's lock, this run knows no other run writes them, so they can go.
         for (const auto& entry : fs::directory_iterator(root / folder, error)) {
             const std::string file = entry.path().filename().string();
             if (file.front() == '.' && file.find(".tmp.") != std::string::npos) fs::remove(entry.path(), error);

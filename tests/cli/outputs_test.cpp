@@ -3,14 +3,20 @@
 // output_kinds_test.cpp.
 #include "run_vtex.h"
 
+#include <vtex/core/folder_lock.h>
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 
+#include <csignal>
+
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 using vtex::test::runVtex;
 namespace fs = std::filesystem;
@@ -101,4 +107,37 @@ TEST(Outputs, TwoOutputFlagsNamingOneFileAreBadUsage) {
         EXPECT_NE(r.err.find("name the same file"), std::string::npos) << r.err;
         EXPECT_FALSE(fs::exists(a)) << args[0];
     }
+}
+
+// One run per output folder (issue 18; core/folder_lock.h): a second `vtex run` on a folder
+// another process holds is refused naming the holder, removes none of its temporaries, and
+// runs once the holder is gone (a killed holder's lock is taken over).
+TEST(Outputs, ASecondRunOnAFolderInUseIsRefused) {
+    const Specials s = makeSpecials("in_use");
+    const fs::path pipeline = s.dir / "p.toml", out = s.dir / "out";
+    std::ofstream(pipeline) << "[[source]]\nname = \"g\"\npattern = \"grass\"\ncount = 4\n";
+    fs::create_directories(out);
+    const fs::path theirs = out / ".x.glb.tmp.elsewhere.1.0.0";
+    std::ofstream(theirs) << "being written";
+    int ready[2];
+    ASSERT_EQ(::pipe(ready), 0);
+    const pid_t holder = ::fork();
+    if (holder == 0) {
+        const vtex::FolderLock lock(out);
+        (void)!::write(ready[1], "x", 1);
+        ::pause();
+        ::_exit(0);
+    }
+    char c = 0;
+    ASSERT_EQ(::read(ready[0], &c, 1), 1);
+    const auto r = runVtex({"run", pipeline.string(), "-o", out.string()});
+    EXPECT_EQ(r.exitStatus, 1) << r.err;
+    EXPECT_NE(r.err.find("in use by"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(std::to_string(holder)), std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(theirs)) << "a refused run removed the holder's temporary";
+    ::kill(holder, SIGKILL);
+    ::waitpid(holder, nullptr, 0);
+    const auto after = runVtex({"run", pipeline.string(), "-o", out.string()});
+    EXPECT_EQ(after.exitStatus, 0) << after.err;
+    EXPECT_FALSE(fs::exists(theirs)) << "the run that holds the lock clears a dead writer's temporaries";
 }

@@ -110,6 +110,8 @@ struct RunOptions {
     /// a stage waits while the others hold too much of it, and fails (as bad input) when its
     /// estimate alone exceeds it. 0: no limit.
     std::uint64_t maxMemoryBytes = 0;
+    /// Another run holds the output folder (core's FolderLock): wait for it instead of failing.
+    bool waitForLock = false;
     /// One line per stage event ("run texel grass", "cached …", "failed …"); may be empty.
     std::function<void(const std::string&)> log;
 };

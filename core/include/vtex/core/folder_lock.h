@@ -1,0 +1,36 @@
+/// @file
+/// @brief One writer per output folder: `vtex run` and `vtex demo` hold a lock on the folder
+/// they write, so that a second run on it cannot remove the first one's temporaries or mix
+/// their outputs (issue 18).
+///
+/// The lock is flock(2) on `DIR/.vtex.lock`: the kernel drops it when its holder exits, however
+/// it exits (a SIGKILL, a killed Slurm job), so the lock of a dead process is simply taken over
+/// by the next run; the file itself stays, holding the last holder's host and pid for the
+/// message a refused run prints. A run that holds the lock may remove the temporaries it finds
+/// (theirs are the writers' who died: AtomicOutputFile names them after host and pid).
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace vtex {
+
+class FolderLock {
+public:
+    enum class Mode { Refuse, Wait };
+    /// Locks `folder` (which must exist). Refuse: throws IoError naming the folder and the
+    /// holder ("in use by pid 1234 on host h") when another process holds it; Wait: blocks until
+    /// it is free.
+    explicit FolderLock(const std::filesystem::path& folder, Mode mode = Mode::Refuse);
+    ~FolderLock();
+    FolderLock(const FolderLock&) = delete;
+    FolderLock& operator=(const FolderLock&) = delete;
+
+    /// "host:pid", how this process names itself in lock files and temporaries' names.
+    static std::string holderName();
+
+private:
+    int mFd = -1;
+};
+
+}  // namespace vtex
