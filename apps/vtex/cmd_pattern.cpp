@@ -45,8 +45,13 @@ const bool registered = registerCommand(15, [](CLI::App& app) -> Action {
         ->check(CLI::Range(-80.0, 80.0));
     app.add_option("--variant", flags->options.variant, "brushed: concentric (default) or radial")
         ->check(CLI::IsMember({"concentric", "radial"}));
-    return [flags](const GlobalOptions& global) {
+    return [flags, &app](const GlobalOptions& global) {
         checkOutputPath(flags->output);  // before any work (atomic_file.h)
+        // An option the pattern does not read is bad usage, not silently ignored.
+        for (const char* option : {"fluctuation", "lean", "variant"})
+            if (app.count(std::string("--") + option) > 0 && !sampler::patternUses(flags->name, option))
+                throw CLI::ValidationError(std::string("--") + option, "the " + flags->name + " pattern does not use it (" +
+                                                                          sampler::patternsUsing(option) + " do)");
         sampler::PatternOptions options = flags->options;
         if (flags->leaves > 0) {
             if (flags->name != "bush") throw CLI::ValidationError("--leaves", "only for the bush pattern");

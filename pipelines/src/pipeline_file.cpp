@@ -82,6 +82,13 @@ Pipeline loadPipeline(const fs::path& file) {
         s.fluctuation = reader.number(t, path, "fluctuation", -1.0, -1.0, 3.2);
         s.leanDegrees = reader.number(t, path, "lean", 0.0, -89.0, 89.0);
         s.variant = reader.string(t, path, "variant", std::string());
+        // A key the source does not read is refused, not silently ignored: a file source reads
+        // none of the pattern keys, a pattern only its own (sampler::patternUses).
+        for (const char* key : {"seed", "count", "fluctuation", "lean", "variant"})
+            if (t.contains(key) && !(hasPattern && sampler::patternUses(s.pattern, key)))
+                reader.fail(TomlReader::join(path, key),
+                            hasPattern ? "the " + s.pattern + " pattern does not use it (" + sampler::patternsUsing(key) + " do)"
+                                       : std::string("a file source has no pattern options"));
         pipeline.sources.push_back(s);
     }
 

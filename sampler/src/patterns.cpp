@@ -485,6 +485,23 @@ const std::vector<std::string>& patternNames() {
 
 bool isCyclicPattern(std::string_view name) { return name == "grass" || name == "fur"; }
 
+bool patternUses(std::string_view pattern, std::string_view option) {
+    if (option == "seed" || option == "count") return true;
+    if (option == "fluctuation" || option == "lean") return pattern == "grass" || pattern == "fur";
+    if (option == "variant") return pattern == "brushed";
+    return false;
+}
+
+std::string patternsUsing(std::string_view option) {
+    std::vector<std::string> users;
+    for (const std::string& name : patternNames())
+        if (patternUses(name, option)) users.push_back(name);
+    std::string text;
+    for (std::size_t i = 0; i < users.size(); ++i)
+        text += (i == 0 ? "" : i + 1 == users.size() ? " and " : ", ") + users[i];
+    return text.empty() ? "no pattern" : text;
+}
+
 ingest::TriangleMesh makePattern(std::string_view name, const PatternOptions& options) {
     if (options.count < 0 || options.count > 10'000'000) throw std::invalid_argument("count out of range");
     if (!std::isfinite(options.fluctuation) || options.fluctuation > kPi)

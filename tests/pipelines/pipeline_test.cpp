@@ -392,10 +392,13 @@ TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {
         {"texels = { cover = \"grass\" }", "texels = { moss = \"grass\" }"},  // not in the scene
         {"[pipeline]", "[pipeline"},                          // TOML syntax
         {"texels = { cover = \"grass\" }", "renderer = \"reference\""},  // nothing to draw in the cells
+        {"count = 8", "count = 8\nvariant = \"radial\""},  // grass does not use a variant
+        {"file = \"cross.obj\"", "file = \"cross.obj\"\nlean = 10"},  // a file has no pattern options
     };
     const std::vector<std::string> keys = {"texel[0].resolution", "texel[1].source", "source[1].file",
                                            "compare[0].b", "render[0].texels.cover", "source[0]",
-                                           "render[0].texels.moss", "line 2", "render[0].renderer"};
+                                           "render[0].texels.moss", "line 2", "render[0].renderer",
+                                           "source[0].variant", "source[1].lean"};
     for (std::size_t i = 0; i < cases.size(); ++i) {
         std::string bad = good;
         bad.replace(bad.find(cases[i].first), cases[i].first.size(), cases[i].second);

@@ -18,6 +18,25 @@ fs::path tmp(const std::string& name) {
     return dir / name;
 }
 
+// An option the pattern does not read is bad usage (issue 16): `--lean 1 --fluctuation 2
+// --variant x` on the bush used to be ignored silently.
+TEST(SamplerCli, APatternOptionThePatternDoesNotUseIsBadUsage) {
+    const auto glb = tmp("unused.glb");
+    for (const std::vector<std::string>& extra : {std::vector<std::string>{"--lean", "1"},
+                                                  {"--fluctuation", "0.5"},
+                                                  {"--variant", "radial"}}) {
+        std::vector<std::string> args = {"pattern", "bush", "-o", glb.string()};
+        args.insert(args.end(), extra.begin(), extra.end());
+        const auto r = runVtex(args);
+        EXPECT_EQ(r.exitStatus, 2) << extra[0] << ": " << r.err;
+        EXPECT_NE(r.err.find(extra[0]), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("bush pattern does not use it"), std::string::npos) << r.err;
+        EXPECT_FALSE(std::filesystem::exists(glb));
+    }
+    EXPECT_EQ(runVtex({"pattern", "grass", "-o", glb.string(), "--lean", "10", "--fluctuation", "0.1"}).exitStatus, 0);
+    EXPECT_EQ(runVtex({"pattern", "brushed", "-o", glb.string(), "--variant", "radial"}).exitStatus, 0);
+}
+
 TEST(SamplerCli, PatternSampleBuildInspect) {
     const auto glb = tmp("grass.glb"), vtl = tmp("grass.vtl"), vto = tmp("grass.vto");
     auto r = runVtex({"pattern", "grass", "-o", glb.string(), "--seed", "4"});

@@ -37,6 +37,14 @@ struct PatternOptions {
 
 /// grass, bush, fur, brushed, blocks.
 const std::vector<std::string>& patternNames();
+/// Whether `pattern` reads the option `option` ("seed", "count", "fluctuation", "lean",
+/// "variant"): every pattern takes a seed and a count, grass and fur a fluctuation and a lean,
+/// brushed a variant. An option a pattern does not use is refused by the command line and the
+/// pipeline file rather than silently ignored.
+bool patternUses(std::string_view pattern, std::string_view option);
+/// The patterns that use `option`, as "grass and fur", for messages.
+std::string patternsUsing(std::string_view option);
+
 /// Whether a pattern is tileable in x and y (grass and fur): sample it with `cyclic`.
 bool isCyclicPattern(std::string_view name);
 
