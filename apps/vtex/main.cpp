@@ -3,12 +3,17 @@
 #include "cli.h"
 #include "registry.h"
 
+#include "vtex_commit.h"
+
 #include <vtex/core/error.h>
 #include <vtex/core/version.h>
 
 #include <algorithm>
 #include <iostream>
 #include <new>
+#include <optional>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -18,6 +23,50 @@ constexpr const char* kExitStatuses =
 
 int exitCode(vtex::ExitStatus status) { return static_cast<int>(status); }
 
+// Levenshtein distance, for "did you mean".
+std::size_t editDistance(const std::string& a, const std::string& b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            diagonal = up;
+        }
+    }
+    return row[b.size()];
+}
+
+// The command line as CLI11 gets it: `vtex help [CMD]` is `vtex [CMD] --help`, as in git.
+std::vector<std::string> normalisedArguments(int argc, char** argv) {
+    std::vector<std::string> args(argv + 1, argv + argc);
+    if (!args.empty() && args[0] == "help") {
+        args.erase(args.begin());
+        args.resize(std::min<std::size_t>(args.size(), 1));
+        args.push_back("--help");
+    }
+    return args;
+}
+
+// The first argument that is not a global flag, when it names no subcommand: the message
+// suggests the nearest one (`vtex rendr` → render), as git does.
+std::optional<std::string> unknownCommandMessage(const std::vector<std::string>& args, const CLI::App& app) {
+    const auto first = std::find_if(args.begin(), args.end(), [](const std::string& a) { return a.empty() || a[0] != '-'; });
+    if (first == args.end()) return std::nullopt;
+    std::string nearest;
+    std::size_t best = ~std::size_t(0);
+    for (const CLI::App* sub : app.get_subcommands({})) {
+        if (sub->get_name() == *first) return std::nullopt;
+        const std::size_t d = editDistance(*first, sub->get_name());
+        if (d < best) best = d, nearest = sub->get_name();
+    }
+    std::string message = "unknown command '" + *first + "'";
+    if (best <= std::max<std::size_t>(2, nearest.size() / 3)) message += "; did you mean '" + nearest + "'?";
+    return message + " (vtex --help lists the commands)";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -26,7 +75,7 @@ int main(int argc, char** argv) {
                  "renderer",
                  "vtex"};
     app.footer(kExitStatuses);
-    app.set_version_flag("--version", std::string("vtex ") + kVersion);
+    app.set_version_flag("--version", std::string("vtex ") + kVersion + " (commit " + kCommit + ")");
     app.require_subcommand(1);
     app.fallthrough();
 
@@ -45,8 +94,14 @@ int main(int argc, char** argv) {
         actions.emplace_back(sub, factory(*sub));
     }
 
+    std::vector<std::string> args = normalisedArguments(argc, argv);
+    if (const auto unknown = unknownCommandMessage(args, app)) {
+        std::cerr << "vtex: error: " << *unknown << "\n";
+        return exitCode(ExitStatus::Usage);
+    }
+    std::reverse(args.begin(), args.end());  // CLI11 takes a vector last argument first
     try {
-        app.parse(argc, argv);
+        app.parse(args);
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {

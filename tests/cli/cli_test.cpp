@@ -37,3 +37,26 @@ TEST(Cli, NoSubcommandIsBadUsage) {
     const auto r = runVtex({});
     EXPECT_EQ(r.exitStatus, 2);
 }
+
+// The command line's manners (issue 17): `vtex help CMD` is `vtex CMD --help`; an unknown
+// command is bad usage and names the nearest; --version names the commit.
+TEST(Cli, HelpUnknownCommandsAndVersionAsGitDoes) {
+    for (const std::string command : {"render", "sample", "run"}) {
+        const auto help = runVtex({"help", command});
+        const auto flag = runVtex({command, "--help"});
+        EXPECT_EQ(help.exitStatus, 0) << help.err;
+        EXPECT_EQ(help.out, flag.out) << command;
+        EXPECT_NE(help.out.find("Usage: vtex " + command), std::string::npos) << help.out;
+    }
+    EXPECT_EQ(runVtex({"help"}).out, runVtex({"--help"}).out);
+    const auto typo = runVtex({"rendr", "scene.toml"});
+    EXPECT_EQ(typo.exitStatus, 2);
+    EXPECT_NE(typo.err.find("unknown command 'rendr'; did you mean 'render'?"), std::string::npos) << typo.err;
+    const auto far = runVtex({"-q", "xyzzy"});
+    EXPECT_EQ(far.exitStatus, 2);
+    EXPECT_NE(far.err.find("unknown command 'xyzzy'"), std::string::npos) << far.err;
+    EXPECT_EQ(far.err.find("did you mean"), std::string::npos) << "nothing is near xyzzy: " << far.err;
+    const auto version = runVtex({"--version"});
+    EXPECT_EQ(version.exitStatus, 0);
+    EXPECT_NE(version.out.find("(commit "), std::string::npos) << version.out;
+}
