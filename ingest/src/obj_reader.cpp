@@ -249,9 +249,13 @@ private:
     }
 
     // Resolves a file named in the OBJ or MTL inside the input's folder; empty when refused.
+    // Windows separators are normal in MTL files (`map_Kd .\wal67ar_small.jpg`, assimp's
+    // spider): read as '/', so that `..\` parts are refused like `../` ones.
     fs::path containedPath(std::string_view name) {
         if (mRoot.empty() || name.empty()) return {};
-        const fs::path relative{std::string(name)};
+        std::string portable(name);
+        std::replace(portable.begin(), portable.end(), '\\', '/');
+        const fs::path relative{portable};
         if (relative.is_absolute()) return {};
         for (const auto& part : relative)
             if (part == "..") return {};

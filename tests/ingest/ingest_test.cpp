@@ -269,6 +269,31 @@ TEST(Ingest, ObjMaterialsNegativeIndicesAndPolygons) {
     EXPECT_FLOAT_EQ(half.baseColorFactor[3], 0.5f);
 }
 
+// MTL files from Windows name textures with backslashes (assimp's spider.mtl: `map_Kd
+// .\wal67ar_small.jpg`, issue 16): they resolve inside the input's folder, and `..\` still
+// leaves it and is refused like `../`.
+TEST(Ingest, MtlPathsWithBackslashesResolveAndStillCannotLeaveTheFolder) {
+    const fs::path jpg = "/usr/share/assimp/models/OBJ/wal67ar_small.jpg";
+    if (!fs::exists(jpg)) GTEST_SKIP() << "assimp-testmodels is not installed (scripts/test.sh installs it)";
+    fs::create_directories(tmp("objwin/models"));
+    fs::copy_file(jpg, tmp("objwin/models/tex.jpg"), fs::copy_options::overwrite_existing);
+    fs::copy_file(jpg, tmp("objwin/secret.jpg"), fs::copy_options::overwrite_existing);
+    test::writeBytes(tmp("objwin/models/m.mtl"), "newmtl in\nmap_Kd .\\tex.jpg\nnewmtl out\nmap_Kd ..\\secret.jpg\n");
+    test::writeBytes(tmp("objwin/models/a.obj"), "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                                 "usemtl in\nf 1 2 3\nusemtl out\nf 1 3 4\n");
+    IngestReport report;
+    const TriangleMesh m = loadMesh(tmp("objwin/models/a.obj"), {}, &report);
+    ASSERT_EQ(m.textures.size(), 1u) << "the backslashed texture inside the folder is read, the other not";
+    std::size_t refused = 0;
+    for (const auto& w : report.warnings) refused += w.find("secret.jpg") != std::string::npos;
+    EXPECT_EQ(refused, 1u);
+    // The real file: every texture of spider.mtl is found.
+    IngestReport spider;
+    const TriangleMesh s = loadMesh("/usr/share/assimp/models/OBJ/spider.obj", {}, &spider);
+    EXPECT_GE(s.textures.size(), 3u);
+    for (const auto& w : spider.warnings) EXPECT_EQ(w.find("not found inside"), std::string::npos) << w;
+}
+
 TEST(Ingest, OffPlyAndStl) {
     // A unit square, counter-clockwise seen from +z, in each format.
     IngestReport report;
