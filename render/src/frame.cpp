@@ -45,7 +45,7 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
         s.repeatV = def.repeat[1];
         s.height = def.height;
         geometry.surfaces.push_back(s);
-        const auto mesh = def.meshData ? def.meshData : std::make_shared<const ingest::QuadMesh>(ingest::loadBaseMesh(def.mesh));
+        const auto mesh = loadSurfaceMesh(scene, si);
         for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
             Prim prim;
             prim.surface = int(si);

@@ -19,13 +19,13 @@ std::vector<TexelLevelNeed> finestUsefulLevels(const Scene& scene, const RenderO
     // The finest continuous level over all cells, per texel.
     std::vector<double> finest(scene.texels.size(), -std::numeric_limits<double>::infinity());
     std::vector<double> nearest(scene.texels.size(), std::numeric_limits<double>::infinity());
-    for (const SurfaceDef& surface : scene.surfaces) {
+    for (std::size_t si = 0; si < scene.surfaces.size(); ++si) {
+        const SurfaceDef& surface = scene.surfaces[si];
         if (!surface.texel) continue;
         if (*surface.texel >= scene.texels.size()) throw InputError(scene.file, "texel index out of range", "surface.texel");
         const std::size_t texel = *surface.texel;
         needs[texel].used = true;
-        const auto mesh = surface.meshData ? surface.meshData
-                                           : std::make_shared<const ingest::QuadMesh>(ingest::loadBaseMesh(surface.mesh));
+        const auto mesh = loadSurfaceMesh(scene, si);
         for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
             std::array<Vec3, 4> p, n;
             if (!detail::baseFaceCorners(*mesh, f, p, n))

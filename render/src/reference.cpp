@@ -207,10 +207,9 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
         if (!def.sourceData && def.source.empty())
             throw InputError(scene.file, "texel '" + def.name + "' has no source mesh (vtex reference draws it)", "texel.source");
         SourceRuntime& runtime = sources[*s.texel];
-        runtime.mesh = detail::loadSourceMesh(def);
+        runtime.mesh = loadTexelSource(scene, *s.texel);
         // Where the sampler put the mesh in the unit cube is recorded in the volume.
-        const octree::VolumeInfo placement =
-            def.octree ? def.octree->info.source : octree::readVto(def.volume).info.source;
+        const octree::VolumeInfo placement = loadTexelVolume(scene, *s.texel)->info.source;
         runtime.bvh = std::make_unique<detail::SourceBvh>(*runtime.mesh, placement);
         runtime.material = def.material;
         bvhs[*s.texel] = runtime.bvh.get();

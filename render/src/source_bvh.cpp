@@ -23,10 +23,6 @@ constexpr int kMaxShift = 4;
 
 }  // namespace
 
-std::shared_ptr<const ingest::TriangleMesh> loadSourceMesh(const TexelDef& texel) {
-    return texel.sourceData ? texel.sourceData : std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(texel.source));
-}
-
 SourceBvh::SourceBvh(const ingest::TriangleMesh& mesh, const octree::VolumeInfo& volume)
     : mMesh(mesh), mCyclic(volume.cyclic) {
     mPositions.reserve(mesh.positions.size());

@@ -23,20 +23,16 @@ struct SourceHit {
     Color albedo;       ///< linear base colour at the hit
 };
 
-/// The source mesh placed into the unit cube as the sampler placed it (p·scale + offset).
-/// Segments are given in tiled reference coordinates (a surface's `repeat` copies side by side
-/// along x and y) and cut where they cross from one copy to the next. A cyclic volume's mesh
-/// wraps around in x and y as the sampler wrapped it: the parts that stick out of the cube are
-/// seen from the other side, through instances of the one BVH shifted by whole units.
-/// A texel's source mesh: the one given in memory (TexelDef::sourceData), else read from its
-/// `source` file. Throws vtex::InputError.
-std::shared_ptr<const ingest::TriangleMesh> loadSourceMesh(const TexelDef& texel);
-
 /// Shadow rays skip this much reference space (1e-5 of the unit cube, under a hundredth of a
 /// voxel at 1024³) from where they leave a source triangle: far above the float rounding of the
 /// BVH, far below any feature the sampler can resolve.
 inline constexpr double kSelfIntersectionGap = 1e-5;
 
+/// The source mesh placed into the unit cube as the sampler placed it (p·scale + offset).
+/// Segments are given in tiled reference coordinates (a surface's `repeat` copies side by side
+/// along x and y) and cut where they cross from one copy to the next. A cyclic volume's mesh
+/// wraps around in x and y as the sampler wrapped it: the parts that stick out of the cube are
+/// seen from the other side, through instances of the one BVH shifted by whole units.
 class SourceBvh {
 public:
     SourceBvh(const ingest::TriangleMesh& mesh, const octree::VolumeInfo& volume);

@@ -41,7 +41,7 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
         TexelRuntime& t = texels[*s.texel];
         if (t.volume) continue;
         const TexelDef& def = scene.texels[*s.texel];
-        auto tree = def.octree ? def.octree : std::make_shared<const octree::Octree>(octree::readVto(def.volume));
+        auto tree = loadTexelVolume(scene, *s.texel);
         if (tree->levels.empty() || tree->levels[0].empty())
             throw InputError(def.volume, "octree has no root");
         t.tau = def.tau;
@@ -49,7 +49,7 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
         // With a source, the levels the volume is faithful at are measured (one pass of chords):
         // shadows keep to them, and the hybrid traces the mesh past the finest of them.
         if (def.sourceData || !def.source.empty()) {
-            t.sourceMesh = loadSourceMesh(def);
+            t.sourceMesh = loadTexelSource(scene, *s.texel);
             auto source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
             const FaithfulLevels faithful = faithfulLevels(*tree, *source, def.tau, options.hybridTolerance);
             t.coarsestShadowLevel = faithful.coarsest;

@@ -77,6 +77,28 @@ TEST(RenderCli, BadInputExitsThreeNamingFileAndKey) {
     const auto c = runVtex({"render", (corrupt / "scene.toml").string(), "-o", (corrupt / "img.exr").string()});
     EXPECT_EQ(c.exitStatus, 3);
     EXPECT_NE(c.err.find("t.vto"), std::string::npos) << c.err;
+    // Every file the scene names is reported with the scene file and the key that named it
+    // (issue 16): the octree above, a missing mesh, a missing or broken source, for both renderers.
+    EXPECT_NE(c.err.find("scene.toml: texel[0].volume: "), std::string::npos) << c.err;
+    const fs::path files = makeSceneDir("files");
+    std::string text = vtex::test::readText(files / "scene.toml");
+    text.replace(text.find("meshes/plane.obj"), 16, "meshes/gone.obj");
+    std::ofstream(files / "scene.toml", std::ios::trunc) << text;
+    const auto mesh = runVtex({"render", (files / "scene.toml").string(), "-o", (files / "img.exr").string()});
+    EXPECT_EQ(mesh.exitStatus, 3);
+    EXPECT_NE(mesh.err.find("scene.toml: surface[0].mesh: "), std::string::npos) << mesh.err;
+    EXPECT_NE(mesh.err.find("gone.obj"), std::string::npos) << mesh.err;
+    const fs::path sources = makeSceneDir("sources");
+    text = vtex::test::readText(sources / "scene.toml");
+    text.replace(text.find("volume = \"t.vto\""), 16, "volume = \"t.vto\"\nsource = \"leaves.glb\"");
+    std::ofstream(sources / "scene.toml", std::ios::trunc) << text;
+    std::ofstream(sources / "leaves.glb") << "glTF but not really";
+    for (const std::string command : {"render", "reference"}) {
+        const auto r2 = runVtex({command, (sources / "scene.toml").string(), "-o", (sources / "img.exr").string()});
+        EXPECT_EQ(r2.exitStatus, 3) << command;
+        EXPECT_NE(r2.err.find("scene.toml: texel[0].source: "), std::string::npos) << command << ": " << r2.err;
+        EXPECT_NE(r2.err.find("leaves.glb"), std::string::npos) << r2.err;
+    }
 
     const auto missing = runVtex({"render", (dir / "nope.toml").string(), "-o", (dir / "img.exr").string()});
     EXPECT_EQ(missing.exitStatus, 3);

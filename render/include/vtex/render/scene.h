@@ -96,6 +96,14 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file);
 /// Reads and parses a scene file. Throws vtex::InputError / vtex::IoError.
 Scene loadScene(const std::filesystem::path& file);
 
+/// The files the scene names, each read as the renderers read it (or the copy given in
+/// memory): surface `i`'s base mesh, texel `i`'s volume (.vto) and source mesh. An
+/// InputError names the scene file and the key first ("scene.toml: surface[0].mesh: hill.obj:
+/// no such file").
+std::shared_ptr<const ingest::QuadMesh> loadSurfaceMesh(const Scene& scene, std::size_t surface);
+std::shared_ptr<const octree::Octree> loadTexelVolume(const Scene& scene, std::size_t texel);
+std::shared_ptr<const ingest::TriangleMesh> loadTexelSource(const Scene& scene, std::size_t texel);
+
 /// Every file a render of `scene` may read: the scene file, each surface's mesh, each texel's
 /// volume and source (empty paths left out). What a command checks its outputs against.
 std::vector<std::filesystem::path> sceneFiles(const Scene& scene);

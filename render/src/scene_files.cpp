@@ -1,0 +1,53 @@
+// The files a scene names, loaded in one place, so that a bad or missing one is reported with
+// the scene file and the key that named it (issue 16): "forest.toml: surface[0].mesh: hill.obj:
+// no such file" rather than the inner file alone. See scene.h.
+#include <vtex/render/scene.h>
+
+#include <vtex/core/error.h>
+#include <vtex/ingest/ingest.h>
+
+#include <string>
+
+namespace vtex::render {
+namespace {
+
+// Runs `load`; an InputError it throws is rethrown naming the scene file and `key` first. A
+// scene built in memory (no file) passes it on as it is.
+template <class Load>
+auto namingTheKey(const Scene& scene, const std::string& key, Load&& load) -> decltype(load()) {
+    try {
+        return load();
+    } catch (const InputError& e) {
+        if (scene.file.empty()) throw;
+        throw InputError(scene.file, e.what(), key);
+    }
+}
+
+std::string indexedKey(const char* table, std::size_t i, const char* key) {
+    return std::string(table) + "[" + std::to_string(i) + "]." + key;
+}
+
+}  // namespace
+
+std::shared_ptr<const ingest::QuadMesh> loadSurfaceMesh(const Scene& scene, std::size_t surface) {
+    const SurfaceDef& def = scene.surfaces.at(surface);
+    if (def.meshData) return def.meshData;
+    return namingTheKey(scene, indexedKey("surface", surface, "mesh"),
+                        [&] { return std::make_shared<const ingest::QuadMesh>(ingest::loadBaseMesh(def.mesh)); });
+}
+
+std::shared_ptr<const octree::Octree> loadTexelVolume(const Scene& scene, std::size_t texel) {
+    const TexelDef& def = scene.texels.at(texel);
+    if (def.octree) return def.octree;
+    return namingTheKey(scene, indexedKey("texel", texel, "volume"),
+                        [&] { return std::make_shared<const octree::Octree>(octree::readVto(def.volume)); });
+}
+
+std::shared_ptr<const ingest::TriangleMesh> loadTexelSource(const Scene& scene, std::size_t texel) {
+    const TexelDef& def = scene.texels.at(texel);
+    if (def.sourceData) return def.sourceData;
+    return namingTheKey(scene, indexedKey("texel", texel, "source"),
+                        [&] { return std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source)); });
+}
+
+}  // namespace vtex::render
