@@ -43,6 +43,15 @@ Specials makeSpecials(const std::string& name) {
     return s;
 }
 
+// An 8×6 render of one lit square: scene.toml and plane.obj in `dir`.
+fs::path writePlaneScene(const fs::path& dir) {
+    std::ofstream(dir / "plane.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    std::ofstream(dir / "scene.toml") << "[camera]\nposition = [0.5, -2, 1.5]\nlook_at = [0.5, 0.5, 0]\nwidth = 8\nheight = 6\n"
+                                         "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n"
+                                         "[[surface]]\nmesh = \"plane.obj\"\n";
+    return dir / "scene.toml";
+}
+
 }  // namespace
 
 // Inputs are regular files of bounded size (issue 14, item 3): a FIFO hung `vtex run` and
@@ -75,11 +84,7 @@ TEST(Inputs, AFifoADeviceOrADirectoryIsRefusedAsAnyInput) {
 // fail on a full disk instead, once it is written.
 TEST(Outputs, ACommandWritesAllItsOutputsOrNone) {
     const Specials s = makeSpecials("all_or_none");
-    const fs::path scene = s.dir / "scene.toml";
-    std::ofstream(s.dir / "plane.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
-    std::ofstream(scene) << "[camera]\nposition = [0.5, -2, 1.5]\nlook_at = [0.5, 0.5, 0]\nwidth = 8\nheight = 6\n"
-                            "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n"
-                            "[[surface]]\nmesh = \"plane.obj\"\n";
+    const fs::path scene = writePlaneScene(s.dir);
     std::ofstream(s.dir / "not-a-folder") << "x";
     const fs::path exr = s.dir / "y.exr";
     const auto r = runVtex({"render", scene.string(), "-o", exr.string(), "--png", (s.dir / "not-a-folder" / "y.png").string(),
@@ -93,11 +98,7 @@ TEST(Outputs, ACommandWritesAllItsOutputsOrNone) {
 // write both and keep the second: bad usage, refused before any work with both flags named.
 TEST(Outputs, TwoOutputFlagsNamingOneFileAreBadUsage) {
     const Specials s = makeSpecials("same_file");
-    const fs::path scene = s.dir / "scene.toml";
-    std::ofstream(s.dir / "plane.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
-    std::ofstream(scene) << "[camera]\nposition = [0.5, -2, 1.5]\nlook_at = [0.5, 0.5, 0]\nwidth = 8\nheight = 6\n"
-                            "[[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n"
-                            "[[surface]]\nmesh = \"plane.obj\"\n";
+    const fs::path scene = writePlaneScene(s.dir);
     const std::string a = (s.dir / "a.out").string(), again = (s.dir / "." / "a.out").string();
     for (const std::vector<std::string>& args : {std::vector<std::string>{"render", scene.string(), "-o", a, "--png", again},
                                                  {"reference", scene.string(), "-o", a, "--stats", a},
