@@ -130,9 +130,9 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
         TexelDef texel;
         texel.name = r.string(t, p, "name", std::nullopt);
         if (!names.insert(texel.name).second) r.fail(p + ".name", "duplicate texel name '" + texel.name + "'");
-        texel.volume = r.resolve(r.string(t, p, "volume", std::nullopt));
+        texel.volume = r.resolve(p + ".volume", r.string(t, p, "volume", std::nullopt));
         const std::string source = r.string(t, p, "source", std::string());
-        if (!source.empty()) texel.source = r.resolve(source);
+        if (!source.empty()) texel.source = r.resolve(p + ".source", source);
         texel.tau = r.number(t, p, "tau", 1.0, 0, 1e12);
         texel.material = r.material(t, p, texel.material);
         scene.texels.push_back(std::move(texel));
@@ -145,7 +145,7 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
         const std::string p = "surface[" + std::to_string(i) + "]";
         r.checkKeys(t, p, {"mesh", "texel", "height", "placement", "repeat", "material"});
         SurfaceDef s;
-        s.mesh = r.resolve(r.string(t, p, "mesh", std::nullopt));
+        s.mesh = r.resolve(p + ".mesh", r.string(t, p, "mesh", std::nullopt));
         if (t.get("texel")) {
             const std::string name = r.string(t, p, "texel", std::nullopt);
             for (std::size_t k = 0; k < scene.texels.size(); ++k)

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -425,5 +426,24 @@ TEST(Pipeline, StagesThatWouldWriteOneFileAreRefusedBeforeAnythingRuns) {
         for (const auto& entry : fs::recursive_directory_iterator(dir / "out")) {
             EXPECT_EQ(entry.path().string().find(".manifest.json"), std::string::npos) << entry.path();
         }
+    }
+}
+
+// The pipeline reader shares the fix of fuzz_scene's NUL finding (TomlReader::resolve): a
+// pipeline's paths may not hold a NUL either (`scene = "hill.toml\u0000x"` read hill.toml;
+// fuzz/corpus-pipeline/regression_3).
+TEST(Pipeline, FuzzAPathHoldingANulIsRefusedNamingTheKey) {
+    const fs::path dir = makeProject("nul_paths");
+    const std::string good = vtex::test::readText(dir / "pipeline.toml");
+    for (const auto& [from, to, key] : std::vector<std::array<std::string, 3>>{
+             {"scene = \"hill.toml\"", "scene = \"hill.toml\\u0000x\"", "render[0].scene"},
+             {"file = \"cross.obj\"", "file = \"cross.obj\\u0000\"", "source[1].file"},
+             {"output = \"out\"", "output = \"o\\u0000ut\"", "pipeline.output"}}) {
+        std::string bad = good;
+        bad.replace(bad.find(from), from.size(), to);
+        writeText(dir / "pipeline.toml", bad);
+        const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string()});
+        EXPECT_EQ(r.exitStatus, 3) << r.err;
+        EXPECT_NE(r.err.find(key + ": a path may not hold a NUL character"), std::string::npos) << r.err;
     }
 }

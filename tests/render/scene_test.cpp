@@ -115,3 +115,14 @@ TEST(Scene, UnknownKeysAreWarnings) {
     EXPECT_NE(s.warnings[0].find("camera.focal"), std::string::npos);
     EXPECT_NE(s.warnings[1].find("texel[0].colour"), std::string::npos);
 }
+
+// Found by fuzz_scene (fuzz/corpus-scene/regression_1): a path holding a NUL was accepted, and
+// the system then opened the path only up to the NUL — "hill\0.obj" read the file "hill".
+TEST(Scene, FuzzAPathHoldingANulIsRefusedNamingTheKey) {
+    EXPECT_EQ(errorOf(replace(kGood, "mesh = \"/abs/rock.obj\"", "mesh = \"/abs/rock\\u0000.obj\"")),
+              "/scenes/s.toml: surface[1].mesh: a path may not hold a NUL character");
+    EXPECT_EQ(errorOf(replace(kGood, "volume = \"grass.vto\"", "volume = \"grass\\u0000.vto\"")),
+              "/scenes/s.toml: texel[0].volume: a path may not hold a NUL character");
+    EXPECT_EQ(errorOf(replace(kGood, "source = \"grass.glb\"", "source = \"\\u0000\"")),
+              "/scenes/s.toml: texel[0].source: a path may not hold a NUL character");
+}
