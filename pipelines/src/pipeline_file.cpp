@@ -29,8 +29,15 @@ void checkName(const TomlReader& reader, const std::string& key, const std::stri
     if (!seen.insert(name).second) reader.fail(key, "duplicate name '" + name + "'");
 }
 
+// Without an error_code, a name too long or a link loop threw filesystem_error, which the CLI
+// reported as a failure (exit 1) instead of bad input (found by fuzz_pipeline).
 void requireFile(const TomlReader& reader, const std::string& key, const fs::path& path) {
-    if (!fs::is_regular_file(path)) reader.fail(key, "no such file: " + path.string());
+    std::error_code error;
+    const fs::file_status status = fs::status(path, error);
+    if (fs::is_regular_file(status)) return;
+    if (fs::exists(status)) reader.fail(key, "not a regular file: " + path.string());
+    reader.fail(key, "no such file: " + path.string() + (error && error != std::errc::no_such_file_or_directory
+                                                            ? " (" + error.message() + ")" : ""));
 }
 
 }  // namespace

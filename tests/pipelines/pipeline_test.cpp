@@ -429,6 +429,30 @@ TEST(Pipeline, StagesThatWouldWriteOneFileAreRefusedBeforeAnythingRuns) {
     }
 }
 
+// Found by fuzz_pipeline (fuzz/corpus-pipeline/regression_1, regression_2): a file name too long
+// for the system or a link loop made the file check throw std::filesystem's own error, which
+// `vtex run` reported as a failure (exit 1, "filesystem error: status: …") instead of bad input.
+TEST(Pipeline, FuzzANameTooLongOrALinkLoopIsBadInputNamingTheKey) {
+    const fs::path dir = makeProject("long_names");
+    const std::string good = vtex::test::readText(dir / "pipeline.toml");
+    fs::create_symlink("loop-b", dir / "loop-a");
+    fs::create_symlink("loop-a", dir / "loop-b");
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"file = \"cross.obj\"", "file = \"" + std::string(300, 'a') + ".obj\""},  // source[1].file
+        {"scene = \"hill.toml\"", "scene = \"loop-a\""},                            // render[0].scene
+    };
+    const std::vector<std::string> keys = {"source[1].file: no such file", "render[0].scene: no such file"};
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+        std::string bad = good;
+        bad.replace(bad.find(cases[i].first), cases[i].first.size(), cases[i].second);
+        writeText(dir / "pipeline.toml", bad);
+        const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string()});
+        EXPECT_EQ(r.exitStatus, 3) << r.err;
+        EXPECT_NE(r.err.find(keys[i]), std::string::npos) << r.err;
+        EXPECT_EQ(vtex::test::lineCount(r.err), 1u) << r.err;
+    }
+}
+
 // The pipeline reader shares the fix of fuzz_scene's NUL finding (TomlReader::resolve): a
 // pipeline's paths may not hold a NUL either (`scene = "hill.toml\u0000x"` read hill.toml;
 // fuzz/corpus-pipeline/regression_3).
