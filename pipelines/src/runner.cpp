@@ -154,17 +154,6 @@ bool RunReport::succeeded() const {
 RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     const fs::path root = options.output.empty() ? pipeline.output : options.output;
-    for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
-        std::error_code error;
-        fs::create_directories(root / folder, error);
-        if (error) throw IoError(root / folder, "cannot create the output directory: " + error.message());
-        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; no run writes
-        // them now (one run per output directory at a time), so they can go.
-        for (const auto& entry : fs::directory_iterator(root / folder, error)) {
-            const std::string file = entry.path().filename().string();
-            if (file.front() == '.' && file.find(".tmp.") != std::string::npos) fs::remove(entry.path(), error);
-        }
-    }
     auto log = [&](const std::string& line) {
         if (options.log) options.log(line);
     };
@@ -421,6 +410,20 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     }
 
     refuseSharedOutputs(stages, root, pipeline.file);
+
+    // Only now, with the pipeline accepted whole: a refused one (exit 3) left an empty output
+    // directory tree behind (found by fuzz_cli.py).
+    for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
+        std::error_code error;
+        fs::create_directories(root / folder, error);
+        if (error) throw IoError(root / folder, "cannot create the output directory: " + error.message());
+        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; no run writes
+        // them now (one run per output directory at a time), so they can go.
+        for (const auto& entry : fs::directory_iterator(root / folder, error)) {
+            const std::string file = entry.path().filename().string();
+            if (file.front() == '.' && file.find(".tmp.") != std::string::npos) fs::remove(entry.path(), error);
+        }
+    }
 
     MemoryMonitor memory;
     // Run wave by wave; a wave is a run of stages of one kind.

@@ -429,6 +429,19 @@ TEST(Pipeline, StagesThatWouldWriteOneFileAreRefusedBeforeAnythingRuns) {
     }
 }
 
+// Found by fuzz_cli.py (fuzz/corpus-cli/regression_1): `vtex run` of a pipeline refused for
+// an output collision exited 3 but left the empty output tree (out/, out/sources, …) behind; a
+// refused command leaves nothing.
+TEST(Pipeline, FuzzARefusedPipelineLeavesNoOutputDirectory) {
+    const fs::path dir = makeProject("collide_leaves_nothing");
+    writeText(dir / "pipeline.toml", vtex::test::readText(dir / "pipeline.toml") +
+                                         "\n[[compare]]\nname = \"c\"\na = \"grass-hill\"\nb = \"cross-hill\"\n"
+                                         "\n[[compare]]\nname = \"c.manifest\"\na = \"grass-hill\"\nb = \"cross-hill\"\n");
+    const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string()});
+    EXPECT_EQ(r.exitStatus, 3) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 // Found by fuzz_pipeline (fuzz/corpus-pipeline/regression_1, regression_2): a file name too long
 // for the system or a link loop made the file check throw std::filesystem's own error, which
 // `vtex run` reported as a failure (exit 1, "filesystem error: status: …") instead of bad input.
