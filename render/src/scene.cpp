@@ -109,8 +109,13 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
         if (type == "directional") {
             light.type = LightType::Directional;
             const Eigen::Vector3d d = r.vector<3>(t, p, "direction", std::nullopt);
-            if (!(d.norm() > 0)) r.fail(p + ".direction", "must not be zero");
-            light.direction = d.normalized();
+            // [0, 0, -1e308] passed the zero test with a norm that overflowed to inf, and
+            // normalized() made it (-0, 0, -0): a light that lit nothing, exit 0 (found by
+            // fuzz_scene). Such a direction, or one whose squared norm underflows, is scaled by
+            // its largest component first; any other is normalised as it always was.
+            const Eigen::Vector3d scaled = std::isfinite(d.norm()) && d.norm() > 0 ? d : d / d.cwiseAbs().maxCoeff();
+            if (!(scaled.norm() > 0)) r.fail(p + ".direction", "must not be zero");
+            light.direction = scaled.normalized();
         } else if (type == "point") {
             light.type = LightType::Point;
             light.position = r.vector<3>(t, p, "position", std::nullopt);

@@ -126,3 +126,20 @@ TEST(Scene, FuzzAPathHoldingANulIsRefusedNamingTheKey) {
     EXPECT_EQ(errorOf(replace(kGood, "source = \"grass.glb\"", "source = \"\\u0000\"")),
               "/scenes/s.toml: texel[0].source: a path may not hold a NUL character");
 }
+
+// Found by fuzz_scene (fuzz/corpus-scene/regression_2): a directional light's direction of
+// [-0.6, 0.5, -1e308] — straight down — has a norm that overflows, and was stored as (-0, 0, -0):
+// the light lit nothing and the render was black, exit 0. Only the direction matters, not its
+// length, however large or small.
+TEST(Scene, FuzzAHugeOrTinyLightDirectionIsNormalisedNotLost) {
+    for (const char* direction : {"[-0.6, 0.5, -1e308]", "[0, 0, -1e308]", "[1e-200, 0, -1e-200]"}) {
+        const Scene s = parseScene(replace(kGood, "direction = [-1, -0.5, -1]", std::string("direction = ") + direction),
+                                   "/scenes/s.toml");
+        EXPECT_NEAR(s.lights[0].direction.norm(), 1, 1e-12) << direction;
+    }
+    const Scene down = parseScene(replace(kGood, "direction = [-1, -0.5, -1]", "direction = [-0.6, 0.5, -1e308]"),
+                                  "/scenes/s.toml");
+    EXPECT_LT((down.lights[0].direction - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+    EXPECT_NE(errorOf(replace(kGood, "direction = [-1, -0.5, -1]", "direction = [0, 0, 0]")).find("light[0].direction: must not be zero"),
+              std::string::npos);
+}
