@@ -449,6 +449,7 @@ def run_once(vtex, argv, run_dir, env, timeout, rss_limit):
                 break
     with open(os.path.join(run_dir, "..", "stderr.txt"), "rb") as f:
         stderr = f.read().decode("utf-8", "replace")
+    stderr = "\n".join(l for l in stderr.split("\n") if not l.startswith("\t0x"))  # ASan's memory map
     with open(os.path.join(run_dir, "..", "stdout.txt"), "rb") as f:
         stdout = f.read(4096).decode("utf-8", "replace")
     return proc.returncode, stdout, stderr, verdict, time.monotonic() - started, peak
@@ -507,20 +508,53 @@ def inputs_named(argv):
     return read
 
 
-def classify(argv, status, stdout, stderr, verdict, before, after):
+def size_value(text):
+    """Bytes of a CLI11 size ("512MB", "4GiB", "1024"; k = 1024 as vtex's AsSizeValue(false)),
+    or None."""
+    m = re.fullmatch(r"\s*(\d+(?:\.\d*)?)\s*([kmgt]?)(i?)b?\s*", text.lower())
+    if not m:
+        return None
+    return float(m.group(1)) * 1024 ** " kmgt".index(m.group(2) or " ")
+
+
+def promised_memory(argv):
+    """The memory the command was told it may use, bytes, or None: `sample --max-memory`
+    (0: no limit) and `reference --max-memory` (GiB, deformed mode)."""
+    command = command_of(argv)
+    for i, token in enumerate(argv[:-1]):
+        if token == "--max-memory":
+            value = argv[i + 1]
+            if command == "sample":
+                v = size_value(value)
+                return v if v else None
+            if command == "reference" and "deformed" in argv:
+                try:
+                    v = float(value) * (1 << 30)
+                except ValueError:
+                    return None
+                return v if v > 0 else None
+    return None
+
+
+def classify(argv, status, stdout, stderr, verdict, before, after, peak=0):
     """(category, reason) of findings; [] when the run is fine. A timeout is its own category."""
     findings = []
     if verdict == "timeout":
         return [("timeout", "over the per-run time limit")]
-    if verdict == "memory":
+    asan_rss = "hard rss limit exhausted" in stderr  # ASan's own watch on the same limit (exit 86)
+    if verdict == "memory" or asan_rss:
         findings.append(("memory", "resident memory over the limit"))
+    promised = promised_memory(argv)
+    # ASan's shadow, redzones and quarantine on top: twice the promise and 256 MiB.
+    if promised and peak > 2 * promised + (256 << 20):
+        findings.append(("memory", f"peak {peak >> 20} MiB, over its --max-memory of {int(promised) >> 20} MiB"))
     if SANITIZER.search(stderr):
         findings.append(("sanitizer", SANITIZER.search(stderr).group(0)))
     if verdict is None and status < 0:
         findings.append(("signal", f"killed by signal {-status}"))
-    if verdict is None and status not in (0, 1, 2, 3) and status >= 0:
+    if verdict is None and status not in (0, 1, 2, 3) and status >= 0 and not asan_rss:
         findings.append(("status", f"exit status {status}"))
-    if verdict is None and status in (1, 2, 3):
+    if verdict is None and status in (1, 2, 3) and not asan_rss:
         problem = error_line_problem(status, stderr)
         if problem:
             findings.append(("message", problem))
@@ -558,11 +592,49 @@ def signature(argv, status, stderr, verdict):
     """What a run did, coarsely: new signatures keep an input in the working corpus."""
     command = command_of(argv)
     last = [l for l in stderr.split("\n") if l.startswith("vtex: error: ")]
-    message = last[-1] if last else ""
-    message = re.sub(r"[-+]?\d[\d.e+-]*", "N", message)
-    message = re.sub(r"'[^']*'|\"[^\"]*\"", "Q", message)
-    message = re.sub(r"\S*/\S*", "P", message)
+    message = last[-1][len("vtex: error: "):] if last else ""
+    if status == 2:
+        # Usage errors quote the arguments back: keep the options named and the first words
+        # only, or every mutation would look new and the corpus would fill with them.
+        words = [w for w in re.findall(r"[A-Za-z][A-Za-z-]*", message) if not w.startswith("-")][:5]
+        options = sorted(set(re.findall(r"(?<![\w-])--?[a-z][a-z-]*", message)))[:3]
+        message = " ".join(words + options)
+    else:
+        message = re.sub(r"[-+]?\d[\d.e+-]*", "N", message)
+        message = re.sub(r"'[^']*'|\"[^\"]*\"", "Q", message)
+        message = re.sub(r"\S*/\S*", "P", message)
     return f"{command}|{status}|{verdict}|{message[:120]}"
+
+
+def examine(args, execute, work):
+    """Each timeout and memory finding once more, with the given vtex and limits: what it needs
+    without the sanitizers, and whether it finishes."""
+    cases = []
+    for folder, prefix in (("timeouts", "timeout-"), ("findings", "memory-")):
+        path = os.path.join(work, folder)
+        for name in sorted(os.listdir(path)) if os.path.isdir(path) else []:
+            if name.startswith(prefix):
+                with open(os.path.join(path, name)) as f:
+                    record = json.load(f)
+                if record["argv"] not in [c["argv"] for c in cases]:
+                    cases.append({"argv": record["argv"], "campaign": name})
+    for case in cases:
+        status, _, stderr, verdict, seconds, peak, findings = execute(case["argv"])
+        last = [l for l in stderr.split("\n") if l.startswith("vtex: ")]
+        case.update(status=status, verdict=verdict, seconds=round(seconds, 1), peak_rss_mb=peak >> 20,
+                    findings=[c for c, _ in findings], last=last[-1][:200] if last else "")
+        print(json.dumps(case), flush=True)
+    with open(os.path.join(work, "examined.json"), "w") as f:
+        json.dump(cases, f, indent=1)
+    return 0
+
+
+def pick(rng, corpus, usage):
+    """A parent to mutate: one that ended in a usage error (exit 2) a fifth as often."""
+    while True:
+        argv = rng.choice(corpus)
+        if json.dumps(argv) not in usage or rng.random() < 0.2:
+            return argv
 
 
 def main():
@@ -575,14 +647,20 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=20, help="per run, seconds")
     ap.add_argument("--rss-mb", type=int, default=3072, help="resident-memory limit per run, MiB")
+    ap.add_argument("--fresh", action="store_true", help="empty the work folder first (fixtures made again)")
     ap.add_argument("--replay", action="store_true", help="run every seed once, no mutation")
     ap.add_argument("--show", help="run one argv file (JSON) and print everything")
+    ap.add_argument("--examine", action="store_true",
+                    help="run every command line of --work's timeouts and memory findings again (e.g. with a "
+                         "Release vtex, a longer --timeout and a larger --rss-mb) and write examined.json")
     ap.add_argument("--fail-on-findings", action="store_true",
                     help="exit 1 when a run is a finding other than a timeout or the memory limit (smoke run)")
     args = ap.parse_args()
 
     vtex = os.path.abspath(args.vtex)
     work = os.path.abspath(args.work)
+    if args.fresh and os.path.exists(work):
+        shutil.rmtree(work)
     os.makedirs(work, exist_ok=True)
     env = dict(os.environ)
     env["ASAN_OPTIONS"] = ("detect_leaks=1:abort_on_error=0:exitcode=86:quarantine_size_mb=64:"
@@ -607,7 +685,7 @@ def main():
                                                                   args.rss_mb << 20)
         after = snapshot(run_dir)
         return status, stdout, stderr, verdict, seconds, peak, classify(argv, status, stdout, stderr, verdict,
-                                                                        before, after)
+                                                                        before, after, peak)
 
     if args.show:
         with open(args.show) as f:
@@ -617,6 +695,9 @@ def main():
                           "peak_rss_mb": peak >> 20, "findings": findings}, indent=1))
         print("--- stdout\n" + stdout + "--- stderr\n" + stderr[-6000:])
         return 1 if findings else 0
+
+    if args.examine:
+        return examine(args, execute, work)
 
     seeds = []
     for name in sorted(os.listdir(args.seeds)):
@@ -630,6 +711,7 @@ def main():
             corpus.append(json.load(f))
 
     rng = random.Random(args.seed)
+    usage = set()  # corpus entries (as JSON) that ended in a usage error: mutated less often
     stats_file = os.path.join(work, "stats.json")
     stats = {"runs": 0, "seconds": 0.0, "corpus": len(corpus), "signatures": 0, "findings": {}, "timeouts": 0,
              "statuses": {}}
@@ -646,7 +728,7 @@ def main():
             break
         if not args.replay and (elapsed > args.time or (args.runs and stats["runs"] >= args.runs)):
             break
-        argv = queue.pop(0) if queue else mutate(rng, rng.choice(corpus), corpus)
+        argv = queue.pop(0) if queue else mutate(rng, pick(rng, corpus, usage), corpus)
         status, stdout, stderr, verdict, seconds, peak, findings = execute(argv)
         stats["runs"] += 1
         key = "timeout" if verdict == "timeout" else str(status)
@@ -656,6 +738,8 @@ def main():
             signatures.add(sig)
             if not args.replay and argv not in corpus:
                 corpus.append(argv)
+                if status == 2:
+                    usage.add(json.dumps(argv))
                 with open(os.path.join(corpus_dir, f"{len(corpus):06d}.json"), "w") as f:
                     json.dump(argv, f)
         record = {"argv": argv, "status": status, "verdict": verdict, "seconds": round(seconds, 2),
