@@ -8,6 +8,8 @@
 #include <vtex/core/error.h>
 #include <vtex/render/scene.h>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -56,6 +58,9 @@ void checkAccepted(const Scene& s) {
     const Eigen::Vector3d forward = c.lookAt - c.position;
     check(forward.norm() > 0 && std::isfinite(forward.norm()), "camera looks nowhere (or at infinity)");
     check(c.up.norm() > 0, "camera up is zero");
+    // The camera's basis as CameraRays (render/src/frame.cpp) makes it.
+    const Eigen::Vector3d right = forward.normalized().cross(c.up).normalized();
+    check(right.allFinite() && std::abs(right.norm() - 1) < 1e-6, "camera basis not computable");
     for (const Light& l : s.lights) {
         check(within(l.color, 0, 1e9), "light colour outside [0, 1e9]");
         if (l.type == LightType::Directional)
