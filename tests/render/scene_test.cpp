@@ -143,3 +143,11 @@ TEST(Scene, FuzzAHugeOrTinyLightDirectionIsNormalisedNotLost) {
     EXPECT_NE(errorOf(replace(kGood, "direction = [-1, -0.5, -1]", "direction = [0, 0, 0]")).find("light[0].direction: must not be zero"),
               std::string::npos);
 }
+
+// A warning quotes the unknown key, which TOML lets hold a newline ("a\nb" = 1): it is one line
+// too, written like an error message (vtex::oneLine).
+TEST(Scene, AWarningIsOneLineWhateverTheKeyHolds) {
+    const Scene s = parseScene(replace(kGood, "fov_y    = 40", "fov_y = 40\n\"a\\nb\" = 1"), "/scenes/s.toml");
+    ASSERT_EQ(s.warnings.size(), 1u);
+    EXPECT_EQ(s.warnings[0], "/scenes/s.toml: unknown key 'camera.a b' ignored");
+}

@@ -48,7 +48,7 @@ public:
             bool found = false;
             for (auto k : known) found = found || key.str() == k;
             if (!found)
-                mWarnings.push_back(mFile.string() + ": unknown key '" + join(path, key.str()) + "' ignored");
+                mWarnings.push_back(oneLine(mFile.string() + ": unknown key '" + join(path, key.str()) + "' ignored"));
         }
     }
 
