@@ -304,6 +304,7 @@ SPECIAL_PATHS = ["fifo", "fifo.toml", "fifo.exr", "zero.toml", "zero.vtl", "full
                  "link.toml", "a" * 300 + ".exr", "x/" * 600 + "y.exr", "caf\u00e9.exr", "new\nline.exr",
                  "tab\t.exr", "\x01ctrl.exr", "-o", "out.exr", "out.png", "out.json", "out.vtl", "out.vto",
                  "out.glb", "outdir", "sub/new.exr"]
+STRUCTURED = [0.0]  # the share of structured mutations (--structured)
 PATH_LIKE = re.compile(r"\.(obj|glb|gltf|vtl|vto|toml|exr|png|json|ply|off|stl)$|^/|/")
 
 
@@ -364,7 +365,89 @@ def mutate_token(rng, token, argv):
     return random_token(rng, argv)
 
 
+# What each command's options take, for the structured mutations: "out" an output path, "dir"
+# an output folder, "in" an input path, "num" a number, "size" a byte size, a list a choice,
+# None a flag.
+CHOICES = {"pattern": ["grass", "bush", "fur", "brushed", "blocks"], "solid": ["auto", "on", "off"],
+           "bounds": ["auto", "unit", "fit"], "filter": ["neyret", "sggx"], "hybrid": ["on", "off"],
+           "shading": ["fast", "reference"], "mode": ["embedded", "deformed"], "variant": ["concentric", "radial"]}
+IMAGE = {"-o": "out", "--png": "out", "--stats": "out", "--width": "num", "--height": "num", "--threads": "num",
+         "--aov": None}
+OPTIONS = {
+    "ingest": {"-o": "out", "--report": "out", "--max-triangles": "num", "--weld-tolerance": "num",
+               "--drop-invalid": None},
+    "pattern": {"-o": "out", "--seed": "num", "--count": "num", "--leaves": "num", "--fluctuation": "num",
+                "--lean": "num", "--variant": CHOICES["variant"]},
+    "sample": {"-o": "out", "-r": "num", "--cyclic": None, "--solid": CHOICES["solid"], "--solid-density": "num",
+               "--bounds": CHOICES["bounds"], "--max-memory": "size"},
+    "build": {"-o": "out", "--filter": CHOICES["filter"], "--tolerance": "num", "--filter-error-samples": "num"},
+    "inspect": {"--json": None, "--source": "in"},
+    "render": dict(IMAGE, **{"--spp": "num", "--lod-bias": "num", "--shadow-refresh": "num", "--exact": None,
+                             "--hybrid": CHOICES["hybrid"], "--shading": CHOICES["shading"]}),
+    "reference": dict(IMAGE, **{"--spp": "num", "--mode": CHOICES["mode"], "--tolerance": "num",
+                                "--max-memory": "num"}),
+    "compare": {"--json": None, "--diff": "out"},
+    "run": {"-o": "dir", "--force": None, "--jobs": "num"},
+    "demo": {"-o": "dir", "--resolution": "num", "--scale": "num", "--seed": "num", "--force": None, "--jobs": "num"},
+}
+SMALL = ["0", "1", "2", "4", "8", "16", "0.5", "0.01", "-1", "1e-6"]
+SIZES = ["0", "1", "1KB", "64MB", "512MB", "4GiB", "1e3", "-1", "nan", "", "1TB", "18446744073709551616"]
+OUTPUT_TARGETS = ["out.exr", "out.png", "out.json", "out.glb", "out.vtl", "out.vto", "sub/out.exr", "outdir"]
+
+
+def value_for(rng, kind, argv):
+    if kind == "num":
+        return rng.choice(SMALL if rng.random() < 0.5 else NUMBERS)
+    if kind == "size":
+        return rng.choice(SIZES)
+    if isinstance(kind, list):
+        return rng.choice(kind + ["", "x", kind[0].upper()]) if rng.random() < 0.2 else rng.choice(kind)
+    if kind in ("out", "dir"):
+        r = rng.random()
+        read = sorted(t for t in inputs_named(argv) if t in FIXTURE_PATHS)
+        if r < 0.35 and read:
+            return rng.choice(read)  # an input of the command, directly or through a scene or pipeline
+        if r < 0.5:
+            others = output_values(argv)
+            if others:
+                return rng.choice(others)  # another output's path
+        if r < 0.75:
+            return rng.choice(SPECIAL_PATHS)
+        return rng.choice(OUTPUT_TARGETS)
+    return rng.choice(FIXTURE_PATHS if rng.random() < 0.6 else SPECIAL_PATHS)  # "in"
+
+
+def mutate_structured(rng, argv):
+    """One change that keeps the command line well formed: an option's value replaced, an
+    option added with a value of its kind, or the command's input swapped."""
+    argv = list(argv)
+    command = command_of(argv)
+    options = OPTIONS.get(command)
+    if not options:
+        return argv
+    at = argv.index(command)
+    r = rng.random()
+    present = [i for i, t in enumerate(argv) if t in options and options[t] is not None and i + 1 < len(argv)]
+    if r < 0.45 and present:
+        i = rng.choice(present)
+        argv[i + 1] = value_for(rng, options[argv[i]], argv)
+    elif r < 0.85:
+        flag = rng.choice(sorted(options))
+        argv += [flag] if options[flag] is None else [flag, value_for(rng, options[flag], argv)]
+    else:
+        positional = [i for i in range(at + 1, len(argv)) if not argv[i].startswith("-") and
+                      (i == at + 1 or not argv[i - 1].startswith("-") or options.get(argv[i - 1], 0) is None)]
+        if positional:
+            argv[rng.choice(positional)] = value_for(rng, "in", argv)
+    return argv
+
+
 def mutate(rng, argv, corpus):
+    if rng.random() < STRUCTURED[0]:
+        out = argv
+        for _ in range(1 + int(rng.expovariate(1.5))):
+            out = mutate_structured(rng, out)
+        return [a.replace("\0", "") for a in out][:64]
     argv = list(argv)
     for _ in range(1 + int(rng.expovariate(1.0))):
         op = rng.random()
@@ -563,7 +646,8 @@ def classify(argv, status, stdout, stderr, verdict, before, after, peak=0):
             findings.append(("message", "a library's own message: " + line[:200]))
             break
     named = output_values(argv)
-    if status == 0 and len(named) != len(set(named)):
+    helped = any(t in ("-h", "--help", "--version") for t in argv)  # help printed, nothing run
+    if status == 0 and not helped and len(named) != len(set(named)):
         findings.append(("output", "one path given for two outputs, and the command succeeded"))
     if status == 0 and "vtex: error:" in stderr:
         findings.append(("message", "exit 0 with an error message"))
@@ -645,6 +729,8 @@ def main():
     ap.add_argument("--time", type=float, default=600, help="campaign wall time, seconds")
     ap.add_argument("--runs", type=int, default=0, help="stop after this many runs (0: no limit)")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--structured", type=float, default=0.6,
+                    help="share of structure-keeping mutations (an option's value, an option added)")
     ap.add_argument("--timeout", type=float, default=20, help="per run, seconds")
     ap.add_argument("--rss-mb", type=int, default=3072, help="resident-memory limit per run, MiB")
     ap.add_argument("--fresh", action="store_true", help="empty the work folder first (fixtures made again)")
@@ -657,6 +743,7 @@ def main():
                     help="exit 1 when a run is a finding other than a timeout or the memory limit (smoke run)")
     args = ap.parse_args()
 
+    STRUCTURED[0] = args.structured
     vtex = os.path.abspath(args.vtex)
     work = os.path.abspath(args.work)
     if args.fresh and os.path.exists(work):
