@@ -4,6 +4,8 @@
 #include <vtex/core/memory_budget.h>
 #include "registry.h"
 
+#include <vtex/core/error.h>
+
 #include <cstdio>
 #include <cmath>
 #include <iostream>
@@ -102,7 +104,7 @@ void status(const GlobalOptions& options, const std::string& line) {
 }
 
 void warning(const GlobalOptions& options, const std::string& line) {
-    if (options.verbosity() != Verbosity::Quiet) std::cerr << "vtex: warning: " << line << '\n';
+    if (options.verbosity() != Verbosity::Quiet) std::cerr << "vtex: warning: " << oneLine(line) << '\n';
 }
 
 TerminalProgress::TerminalProgress(const GlobalOptions& options)

@@ -27,7 +27,8 @@ const bool registered = registerCommand(50, [](CLI::App& app) -> Action {
                        [](unsigned char c) { return char(std::tolower(c)); });
         const Inspector* inspector = findInspector(extension);
         if (!inspector) throw InputError(path, "unknown file kind '" + extension + "'");
-        if (!std::filesystem::is_regular_file(path)) throw InputError(path, "no such file");
+        std::error_code error;  // a name too long or a link loop is no such file either, not an exception
+        if (!std::filesystem::is_regular_file(path, error)) throw InputError(path, "no such file");
         if (!options->source.empty() && extension != ".vto")
             throw CLI::ValidationError("--source", "only for an octree (.vto)");
         (*inspector)(path, *options, std::cout);

@@ -109,7 +109,9 @@ int main(int argc, char** argv) {
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::cerr << "vtex: error: " << e.what() << "\n"
+        // CLI11 quotes the arguments back, and an argument may hold a newline (found by
+        // fuzz_cli.py): every message is printed on one line (oneLine).
+        std::cerr << "vtex: error: " << oneLine(e.what()) << "\n"
                   << "Run 'vtex --help' or 'vtex <command> --help' for usage.\n";
         return exitCode(ExitStatus::Usage);
     }
@@ -120,19 +122,19 @@ int main(int argc, char** argv) {
         return exitCode(ExitStatus::Success);
     } catch (const CLI::Error& e) {
         // A flag combination an action found invalid after parsing is still bad usage.
-        std::cerr << "vtex: error: " << e.what() << '\n';
+        std::cerr << "vtex: error: " << oneLine(e.what()) << '\n';
         return exitCode(ExitStatus::Usage);
     } catch (const InputError& e) {
-        std::cerr << "vtex: error: " << e.what() << '\n';
+        std::cerr << "vtex: error: " << oneLine(e.what()) << '\n';
         return exitCode(ExitStatus::BadInput);
     } catch (const IoError& e) {
-        std::cerr << "vtex: error: " << e.what() << '\n';
+        std::cerr << "vtex: error: " << oneLine(e.what()) << '\n';
         return exitCode(ExitStatus::Failure);
     } catch (const std::bad_alloc&) {
         std::cerr << "vtex: error: out of memory\n";
         return exitCode(ExitStatus::Failure);
     } catch (const std::exception& e) {
-        std::cerr << "vtex: error: " << e.what() << '\n';
+        std::cerr << "vtex: error: " << oneLine(e.what()) << '\n';
         return exitCode(ExitStatus::Failure);
     }
 }

@@ -75,12 +75,16 @@ void checkOutputFolder(const std::filesystem::path& folder, const std::vector<st
 
 AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::move(target)) {
     if (mTarget.empty()) throw IoError(mTarget, "empty output path");
-    if (!std::filesystem::is_directory(mTarget)) checkOutputPath(mTarget);
-    if (std::filesystem::is_directory(mTarget))
-        throw IoError(mTarget, "is a directory, expected a file name");
+    // With error codes: a name too long or a link loop made the throwing overloads escape as
+    // std::filesystem's own "filesystem error: status: …" (found by fuzz_cli.py); such a path
+    // fails below, when its temporary cannot be created, with vtex's message.
+    std::error_code error;
+    const bool isDirectory = std::filesystem::is_directory(mTarget, error);
+    if (!isDirectory) checkOutputPath(mTarget);
+    if (isDirectory) throw IoError(mTarget, "is a directory, expected a file name");
     std::filesystem::path directory = mTarget.parent_path();
     if (directory.empty()) directory = ".";
-    if (!std::filesystem::is_directory(directory))
+    if (!std::filesystem::is_directory(directory, error))
         throw IoError(mTarget, "output directory does not exist");
 
     // Hidden, and named after the target, so a stray temporary is easy to attribute. Not

@@ -1,15 +1,11 @@
 #include <vtex/core/error.h>
 
 namespace vtex {
-namespace {
-std::string joinMessage(const std::filesystem::path& file, const std::string& location,
-                        const std::string& problem) {
-    std::string message = file.string();
-    if (!location.empty()) message += ": " + location;
-    message += ": " + problem;
-    // One line, whatever the problem text carries (it may quote untrusted input), and all of it:
-    // a NUL (a scene path may hold one) would end the message where what() is printed, other
-    // control characters would garble the terminal; they are written as \xHH.
+
+// One line, whatever the text carries (it may quote untrusted input), and all of it: a NUL (a
+// scene path may hold one) would end the message where what() is printed, other control
+// characters would garble the terminal; they are written as \xHH.
+std::string oneLine(std::string_view message) {
     std::string clean;
     clean.reserve(message.size());
     for (const char c : message) {
@@ -25,6 +21,15 @@ std::string joinMessage(const std::filesystem::path& file, const std::string& lo
         }
     }
     return clean;
+}
+
+namespace {
+std::string joinMessage(const std::filesystem::path& file, const std::string& location,
+                        const std::string& problem) {
+    std::string message = file.string();
+    if (!location.empty()) message += ": " + location;
+    message += ": " + problem;
+    return oneLine(message);
 }
 }  // namespace
 

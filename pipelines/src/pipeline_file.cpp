@@ -29,8 +29,15 @@ void checkName(const TomlReader& reader, const std::string& key, const std::stri
     if (!seen.insert(name).second) reader.fail(key, "duplicate name '" + name + "'");
 }
 
+// Without an error_code, a name too long or a link loop threw filesystem_error, which the CLI
+// reported as a failure (exit 1) instead of bad input (found by fuzz_pipeline).
 void requireFile(const TomlReader& reader, const std::string& key, const fs::path& path) {
-    if (!fs::is_regular_file(path)) reader.fail(key, "no such file: " + path.string());
+    std::error_code error;
+    const fs::file_status status = fs::status(path, error);
+    if (fs::is_regular_file(status)) return;
+    if (fs::exists(status)) reader.fail(key, "not a regular file: " + path.string());
+    reader.fail(key, "no such file: " + path.string() + (error && error != std::errc::no_such_file_or_directory
+                                                            ? " (" + error.message() + ")" : ""));
 }
 
 }  // namespace
@@ -54,7 +61,7 @@ Pipeline loadPipeline(const fs::path& file) {
     if (const toml::table* settings = reader.subtable(root, "", "pipeline", false)) {
         reader.checkKeys(*settings, "pipeline", {"output", "fit_resolution"});
         pipeline.fitResolution = reader.boolean(*settings, "pipeline", "fit_resolution", true);
-        if (settings->contains("output")) pipeline.output = reader.resolve(reader.string(*settings, "pipeline", "output", {}));
+        if (settings->contains("output")) pipeline.output = reader.resolve("pipeline.output", reader.string(*settings, "pipeline", "output", {}));
     }
 
     std::set<std::string> sourceNames, texelNames, renderNames, compareNames;
@@ -74,7 +81,7 @@ Pipeline loadPipeline(const fs::path& file) {
             if (std::find(patterns.begin(), patterns.end(), s.pattern) == patterns.end())
                 reader.fail(TomlReader::join(path, "pattern"), "unknown pattern '" + s.pattern + "'");
         } else {
-            s.file = reader.resolve(reader.string(t, path, "file", {}));
+            s.file = reader.resolve(TomlReader::join(path, "file"), reader.string(t, path, "file", {}));
             requireFile(reader, TomlReader::join(path, "file"), s.file);
         }
         s.seed = std::uint64_t(reader.integer(t, path, "seed", 1, 0, std::numeric_limits<long long>::max()));
@@ -121,7 +128,7 @@ Pipeline loadPipeline(const fs::path& file) {
         RenderStep s;
         s.name = reader.string(t, path, "name", {});
         checkName(reader, TomlReader::join(path, "name"), s.name, renderNames);
-        s.scene = reader.resolve(reader.string(t, path, "scene", {}));
+        s.scene = reader.resolve(TomlReader::join(path, "scene"), reader.string(t, path, "scene", {}));
         requireFile(reader, TomlReader::join(path, "scene"), s.scene);
         if (const toml::table* bindings = reader.subtable(t, path, "texels", false)) {
             for (const auto& [sceneName, node] : *bindings) {

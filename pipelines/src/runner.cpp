@@ -157,24 +157,8 @@ bool RunReport::succeeded() const {
 RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     const fs::path root = options.output.empty() ? pipeline.output : options.output;
-    // Before any folder is made: `-o` a FIFO, a device, a file or the pipeline itself is bad input.
+    // Before anything: `-o` a FIFO, a device, a file or the pipeline itself is bad input.
     checkOutputFolder(root, {pipeline.file});
-    std::error_code made;
-    fs::create_directories(root, made);
-    if (made) throw IoError(root, "cannot create the output directory: " + made.message());
-    // One run per output folder (folder_lock.h): held until this run returns.
-    const FolderLock lock(root, options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse);
-    for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
-        std::error_code error;
-        fs::create_directories(root / folder, error);
-        if (error) throw IoError(root / folder, "cannot create the output directory: " + error.message());
-        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; holding the
-        // folder's lock, this run knows no other run writes them, so they can go.
-        for (const auto& entry : fs::directory_iterator(root / folder, error)) {
-            const std::string file = entry.path().filename().string();
-            if (file.front() == '.' && file.find(".tmp.") != std::string::npos) fs::remove(entry.path(), error);
-        }
-    }
     auto log = [&](const std::string& line) {
         if (options.log) options.log(line);
     };
@@ -455,6 +439,25 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     }
 
     refuseSharedOutputs(stages, root, pipeline.file);
+
+    // Only now, with the pipeline accepted whole: a refused one (exit 3) left an empty output
+    // directory tree behind (found by fuzz_cli.py).
+    std::error_code made;
+    fs::create_directories(root, made);
+    if (made) throw IoError(root, "cannot create the output directory: " + made.message());
+    // One run per output folder (folder_lock.h): held until this run returns.
+    const FolderLock lock(root, options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse);
+    for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
+        std::error_code error;
+        fs::create_directories(root / folder, error);
+        if (error) throw IoError(root / folder, "cannot create the output directory: " + error.message());
+        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; holding the
+        // folder's lock, this run knows no other run writes them, so they can go.
+        for (const auto& entry : fs::directory_iterator(root / folder, error)) {
+            const std::string file = entry.path().filename().string();
+            if (file.front() == '.' && file.find(".tmp.") != std::string::npos) fs::remove(entry.path(), error);
+        }
+    }
 
     MemoryMonitor memory;
     // Run wave by wave; a wave is a run of stages of one kind.

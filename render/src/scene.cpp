@@ -109,8 +109,13 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
         if (type == "directional") {
             light.type = LightType::Directional;
             const Eigen::Vector3d d = r.vector<3>(t, p, "direction", std::nullopt);
-            if (!(d.norm() > 0)) r.fail(p + ".direction", "must not be zero");
-            light.direction = d.normalized();
+            // [0, 0, -1e308] passed the zero test with a norm that overflowed to inf, and
+            // normalized() made it (-0, 0, -0): a light that lit nothing, exit 0 (found by
+            // fuzz_scene). Such a direction, or one whose squared norm underflows, is scaled by
+            // its largest component first; any other is normalised as it always was.
+            const Eigen::Vector3d scaled = std::isfinite(d.norm()) && d.norm() > 0 ? d : d / d.cwiseAbs().maxCoeff();
+            if (!(scaled.norm() > 0)) r.fail(p + ".direction", "must not be zero");
+            light.direction = scaled.normalized();
         } else if (type == "point") {
             light.type = LightType::Point;
             light.position = r.vector<3>(t, p, "position", std::nullopt);
@@ -130,9 +135,9 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
         TexelDef texel;
         texel.name = r.string(t, p, "name", std::nullopt);
         if (!names.insert(texel.name).second) r.fail(p + ".name", "duplicate texel name '" + texel.name + "'");
-        texel.volume = r.resolve(r.string(t, p, "volume", std::nullopt));
+        texel.volume = r.resolve(p + ".volume", r.string(t, p, "volume", std::nullopt));
         const std::string source = r.string(t, p, "source", std::string());
-        if (!source.empty()) texel.source = r.resolve(source);
+        if (!source.empty()) texel.source = r.resolve(p + ".source", source);
         texel.tau = r.number(t, p, "tau", 1.0, 0, 1e12);
         texel.material = r.material(t, p, texel.material);
         scene.texels.push_back(std::move(texel));
@@ -145,7 +150,7 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
         const std::string p = "surface[" + std::to_string(i) + "]";
         r.checkKeys(t, p, {"mesh", "texel", "height", "placement", "repeat", "material"});
         SurfaceDef s;
-        s.mesh = r.resolve(r.string(t, p, "mesh", std::nullopt));
+        s.mesh = r.resolve(p + ".mesh", r.string(t, p, "mesh", std::nullopt));
         if (t.get("texel")) {
             const std::string name = r.string(t, p, "texel", std::nullopt);
             for (std::size_t k = 0; k < scene.texels.size(); ++k)

@@ -60,3 +60,16 @@ TEST(Cli, HelpUnknownCommandsAndVersionAsGitDoes) {
     EXPECT_EQ(version.exitStatus, 0);
     EXPECT_NE(version.out.find("(commit "), std::string::npos) << version.out;
 }
+
+// Found by fuzz_cli.py (fuzz/corpus-cli/regression_2): CLI11 quotes the arguments it did not
+// expect, and an argument holding a newline split the error over two lines. Every message is
+// one line, followed by the usage hint.
+TEST(Cli, FuzzAnArgumentHoldingANewlineStillGivesAOneLineError) {
+    const auto r = runVtex({"inspect", "a.vto", "new\nline.exr"});
+    EXPECT_EQ(r.exitStatus, 2) << r.err;
+    EXPECT_EQ(r.err, "vtex: error: The following argument was not expected: new line.exr\n"
+                     "Run 'vtex --help' or 'vtex <command> --help' for usage.\n");
+    const auto bad = runVtex({"render", "no\nsuch\r.toml", "-o", "x.exr"});
+    EXPECT_EQ(bad.exitStatus, 3) << bad.err;
+    EXPECT_EQ(vtex::test::lineCount(bad.err), 1u) << bad.err;
+}

@@ -142,3 +142,22 @@ TEST(Outputs, ASecondRunOnAFolderInUseIsRefused) {
     EXPECT_EQ(after.exitStatus, 0) << after.err;
     EXPECT_FALSE(fs::exists(theirs)) << "the run that holds the lock clears a dead writer's temporaries";
 }
+
+// Found by fuzz_cli.py (fuzz/corpus-cli/regression_3; `vtex inspect`, regression_4, by reading
+// for the same call after): a file name too long for the system made std::filesystem's
+// throwing calls escape with their own message ("filesystem error: status: File name too long
+// [...]"). An output that cannot be created is vtex's failure to write it (exit 1), an input
+// that cannot be found is no such file (exit 3).
+TEST(Outputs, FuzzANameTooLongGetsVtexsOwnOneLineMessage) {
+    const Specials s = makeSpecials("too_long");
+    const std::string name = (s.dir / std::string(300, 'a')).string();
+    const auto out = runVtex({"pattern", "grass", "--count", "4", "-o", name + ".glb"});
+    EXPECT_EQ(out.exitStatus, 1) << out.err;
+    EXPECT_EQ(vtex::test::lineCount(out.err), 1u) << out.err;
+    EXPECT_NE(out.err.find("cannot create a temporary file beside it: File name too long"), std::string::npos) << out.err;
+    const auto in = runVtex({"inspect", name + ".vto"});
+    EXPECT_EQ(in.exitStatus, 3) << in.err;
+    EXPECT_NE(in.err.find(".vto: no such file"), std::string::npos) << in.err;
+    for (const auto& entry : fs::directory_iterator(s.dir))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
+}

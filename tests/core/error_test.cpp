@@ -25,3 +25,9 @@ TEST(InputError, AControlCharacterOrNulDoesNotCutTheMessage) {
     EXPECT_EQ(message, "scenes/a\\x00b.obj: surface[0].mesh: no such file");
     EXPECT_EQ(std::string(InputError("x", std::string("bell\a") + "\x1b[31m").what()), "x: bell\\x07\\x1b[31m");
 }
+
+TEST(InputError, OneLineIsWhatEveryPrintedMessageGoesThrough) {
+    EXPECT_EQ(vtex::oneLine("a\nb\rc\td"), "a b c d");
+    EXPECT_EQ(vtex::oneLine(std::string("nul") + '\0' + "\x1b"), "nul\\x00\\x1b");
+    EXPECT_EQ(vtex::oneLine("plain: text ☃"), "plain: text ☃");
+}

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -437,5 +438,61 @@ TEST(Pipeline, StagesThatWouldWriteOneFileAreRefusedBeforeAnythingRuns) {
         for (const auto& entry : fs::recursive_directory_iterator(dir / "out")) {
             EXPECT_EQ(entry.path().string().find(".manifest.json"), std::string::npos) << entry.path();
         }
+    }
+}
+
+// Found by fuzz_cli.py (fuzz/corpus-cli/regression_1): `vtex run` of a pipeline refused for
+// an output collision exited 3 but left the empty output tree (out/, out/sources, …) behind; a
+// refused command leaves nothing.
+TEST(Pipeline, FuzzARefusedPipelineLeavesNoOutputDirectory) {
+    const fs::path dir = makeProject("collide_leaves_nothing");
+    writeText(dir / "pipeline.toml", vtex::test::readText(dir / "pipeline.toml") +
+                                         "\n[[compare]]\nname = \"c\"\na = \"grass-hill\"\nb = \"cross-hill\"\n"
+                                         "\n[[compare]]\nname = \"c.manifest\"\na = \"grass-hill\"\nb = \"cross-hill\"\n");
+    const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string()});
+    EXPECT_EQ(r.exitStatus, 3) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+// Found by fuzz_pipeline (fuzz/corpus-pipeline/regression_1, regression_2): a file name too long
+// for the system or a link loop made the file check throw std::filesystem's own error, which
+// `vtex run` reported as a failure (exit 1, "filesystem error: status: …") instead of bad input.
+TEST(Pipeline, FuzzANameTooLongOrALinkLoopIsBadInputNamingTheKey) {
+    const fs::path dir = makeProject("long_names");
+    const std::string good = vtex::test::readText(dir / "pipeline.toml");
+    fs::create_symlink("loop-b", dir / "loop-a");
+    fs::create_symlink("loop-a", dir / "loop-b");
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"file = \"cross.obj\"", "file = \"" + std::string(300, 'a') + ".obj\""},  // source[1].file
+        {"scene = \"hill.toml\"", "scene = \"loop-a\""},                            // render[0].scene
+    };
+    const std::vector<std::string> keys = {"source[1].file: no such file", "render[0].scene: no such file"};
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+        std::string bad = good;
+        bad.replace(bad.find(cases[i].first), cases[i].first.size(), cases[i].second);
+        writeText(dir / "pipeline.toml", bad);
+        const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string()});
+        EXPECT_EQ(r.exitStatus, 3) << r.err;
+        EXPECT_NE(r.err.find(keys[i]), std::string::npos) << r.err;
+        EXPECT_EQ(vtex::test::lineCount(r.err), 1u) << r.err;
+    }
+}
+
+// The pipeline reader shares the fix of fuzz_scene's NUL finding (TomlReader::resolve): a
+// pipeline's paths may not hold a NUL either (`scene = "hill.toml\u0000x"` read hill.toml;
+// fuzz/corpus-pipeline/regression_3).
+TEST(Pipeline, FuzzAPathHoldingANulIsRefusedNamingTheKey) {
+    const fs::path dir = makeProject("nul_paths");
+    const std::string good = vtex::test::readText(dir / "pipeline.toml");
+    for (const auto& [from, to, key] : std::vector<std::array<std::string, 3>>{
+             {"scene = \"hill.toml\"", "scene = \"hill.toml\\u0000x\"", "render[0].scene"},
+             {"file = \"cross.obj\"", "file = \"cross.obj\\u0000\"", "source[1].file"},
+             {"output = \"out\"", "output = \"o\\u0000ut\"", "pipeline.output"}}) {
+        std::string bad = good;
+        bad.replace(bad.find(from), from.size(), to);
+        writeText(dir / "pipeline.toml", bad);
+        const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string()});
+        EXPECT_EQ(r.exitStatus, 3) << r.err;
+        EXPECT_NE(r.err.find(key + ": a path may not hold a NUL character"), std::string::npos) << r.err;
     }
 }

@@ -115,3 +115,39 @@ TEST(Scene, UnknownKeysAreWarnings) {
     EXPECT_NE(s.warnings[0].find("camera.focal"), std::string::npos);
     EXPECT_NE(s.warnings[1].find("texel[0].colour"), std::string::npos);
 }
+
+// Found by fuzz_scene (fuzz/corpus-scene/regression_1): a path holding a NUL was accepted, and
+// the system then opened the path only up to the NUL — "hill\0.obj" read the file "hill".
+TEST(Scene, FuzzAPathHoldingANulIsRefusedNamingTheKey) {
+    EXPECT_EQ(errorOf(replace(kGood, "mesh = \"/abs/rock.obj\"", "mesh = \"/abs/rock\\u0000.obj\"")),
+              "/scenes/s.toml: surface[1].mesh: a path may not hold a NUL character");
+    EXPECT_EQ(errorOf(replace(kGood, "volume = \"grass.vto\"", "volume = \"grass\\u0000.vto\"")),
+              "/scenes/s.toml: texel[0].volume: a path may not hold a NUL character");
+    EXPECT_EQ(errorOf(replace(kGood, "source = \"grass.glb\"", "source = \"\\u0000\"")),
+              "/scenes/s.toml: texel[0].source: a path may not hold a NUL character");
+}
+
+// Found by fuzz_scene (fuzz/corpus-scene/regression_2): a directional light's direction of
+// [-0.6, 0.5, -1e308] — straight down — has a norm that overflows, and was stored as (-0, 0, -0):
+// the light lit nothing and the render was black, exit 0. Only the direction matters, not its
+// length, however large or small.
+TEST(Scene, FuzzAHugeOrTinyLightDirectionIsNormalisedNotLost) {
+    for (const char* direction : {"[-0.6, 0.5, -1e308]", "[0, 0, -1e308]", "[1e-200, 0, -1e-200]"}) {
+        const Scene s = parseScene(replace(kGood, "direction = [-1, -0.5, -1]", std::string("direction = ") + direction),
+                                   "/scenes/s.toml");
+        EXPECT_NEAR(s.lights[0].direction.norm(), 1, 1e-12) << direction;
+    }
+    const Scene down = parseScene(replace(kGood, "direction = [-1, -0.5, -1]", "direction = [-0.6, 0.5, -1e308]"),
+                                  "/scenes/s.toml");
+    EXPECT_LT((down.lights[0].direction - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+    EXPECT_NE(errorOf(replace(kGood, "direction = [-1, -0.5, -1]", "direction = [0, 0, 0]")).find("light[0].direction: must not be zero"),
+              std::string::npos);
+}
+
+// A warning quotes the unknown key, which TOML lets hold a newline ("a\nb" = 1): it is one line
+// too, written like an error message (vtex::oneLine).
+TEST(Scene, AWarningIsOneLineWhateverTheKeyHolds) {
+    const Scene s = parseScene(replace(kGood, "fov_y    = 40", "fov_y = 40\n\"a\\nb\" = 1"), "/scenes/s.toml");
+    ASSERT_EQ(s.warnings.size(), 1u);
+    EXPECT_EQ(s.warnings[0], "/scenes/s.toml: unknown key 'camera.a b' ignored");
+}

@@ -8,11 +8,17 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace vtex {
 
 /// Exit statuses of the `vtex` program (see DESIGN.md, "The command line").
 enum class ExitStatus : int { Success = 0, Failure = 1, Usage = 2, BadInput = 3 };
+
+/// `text` on one line, as InputError and IoError write their messages: newlines, carriage
+/// returns and tabs as spaces, NUL and the other control characters as \xHH. For any message
+/// that may quote untrusted text (a file's key, a command-line argument).
+std::string oneLine(std::string_view text);
 
 /// Malformed, truncated, hostile or absurd input data. `what()` is one line:
 /// "<file>: [<location>: ]<problem>", where location is a glTF JSON path, an OBJ line, a

@@ -48,7 +48,7 @@ public:
             bool found = false;
             for (auto k : known) found = found || key.str() == k;
             if (!found)
-                mWarnings.push_back(mFile.string() + ": unknown key '" + join(path, key.str()) + "' ignored");
+                mWarnings.push_back(oneLine(mFile.string() + ": unknown key '" + join(path, key.str()) + "' ignored"));
         }
     }
 
@@ -158,8 +158,11 @@ public:
         return out;
     }
 
-    /// A path relative to the file being read (absolute paths are kept).
-    std::filesystem::path resolve(const std::string& relative) const {
+    /// The path the value of `key` gives, relative to the file being read (absolute paths are
+    /// kept). A NUL in it is refused: no file has such a name, and the system would open the
+    /// path only up to the NUL, another file than the one named (found by fuzz_scene).
+    std::filesystem::path resolve(const std::string& key, const std::string& relative) const {
+        if (relative.find('\0') != std::string::npos) fail(key, "a path may not hold a NUL character");
         const std::filesystem::path p(relative);
         if (p.is_absolute()) return p;
         return mFile.parent_path() / p;
