@@ -204,6 +204,13 @@ TEST(Pipeline, TouchingAnInputRerunsExactlyWhatDependsOnIt) {
     report = run(dir);
     EXPECT_EQ(stagesWith(report, Status::Ran),
               (std::set<std::string>{"render grass-hill", "render cross-hill", "compare grass-vs-cross"}));
+
+    // A render parameter, the level fit: that render alone, and the comparison its image feeds.
+    pipeline = vtex::test::readText(dir / "pipeline.toml");
+    pipeline.replace(pipeline.find("hybrid = false"), 14, "hybrid = false\nlevel_fit = false");
+    writeText(dir / "pipeline.toml", pipeline);
+    report = run(dir);
+    EXPECT_EQ(stagesWith(report, Status::Ran), (std::set<std::string>{"render cross-hill", "compare grass-vs-cross"}));
 }
 
 TEST(Pipeline, ACorruptedCachedArtifactIsRebuilt) {

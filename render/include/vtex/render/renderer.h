@@ -102,6 +102,12 @@ struct RenderOptions : ImageOptions {
     /// one level. false: always the volume.
     bool hybrid = true;
     double hybridTolerance = 0.02;
+    /// For a texel with a source mesh, each level's densities are scaled by the factor that makes
+    /// its mean transmittance over chords crossing the shell (top face to floor, as camera and
+    /// shadow rays do) equal to the fraction of those chords that miss the mesh, measured at load
+    /// (octree::fitShellChords; docs/render.md, "Levels fitted to the source"). false: the
+    /// densities as filtered.
+    bool fitLevels = true;
 };
 
 struct RenderStats {
@@ -124,6 +130,8 @@ struct RenderStats {
     /// summed), and per texel the level past which its mesh takes over (−1: no mesh).
     double meshSegments = 0;
     std::vector<double> meshLevels;
+    /// Per texel, the factor of τ of each level (RenderOptions::fitLevels; empty: not fitted).
+    std::vector<std::vector<double>> levelScales;
     /// Texel renders: "exact", or ApproximationBudget::key() of the budget used.
     std::string approximations;
     /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:
