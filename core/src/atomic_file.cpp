@@ -6,8 +6,8 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
-#include <random>
 #include <cstring>
+#include <random>
 #include <string>
 
 #include <fcntl.h>

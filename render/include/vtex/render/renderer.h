@@ -47,7 +47,6 @@ struct ImageOptions {
     std::uint64_t maxMemoryBytes = 0;
 };
 
-
 /// Every approximation of the texel renderer that trades error for time, in one place, each
 /// with its bound stated and tested (docs/render.md). exact() turns them all off: the render
 /// they are measured against. key() is what a pipeline's cache key and stats.json record.
