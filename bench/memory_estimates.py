@@ -71,36 +71,31 @@ def peak(binary, args):
     return int(out)
 
 
+def write_grid(path, n, origin):
+    """n×n unit quads in z = 0, their corner at (origin, origin)."""
+    with open(path, 'w') as f:
+        for j in range(n + 1):
+            for i in range(n + 1):
+                f.write('v %d %d 0\n' % (origin + i, origin + j))
+        for j in range(n):
+            for i in range(n):
+                a = j * (n + 1) + i + 1
+                f.write('f %d %d %d %d\n' % (a, a + 1, a + n + 2, a + n + 1))
+
+
 def make_inputs(binary):
     for name, leaves in (('bush', 2000), ('bush20k', 20000)):
         vtex(binary, 'pattern', 'bush', '-o', name + '.glb', '--leaves', str(leaves))
     with open('plane.obj', 'w') as f:
         f.write(PLANE_OBJ)
-    with open('grid.obj', 'w') as f:
-        n = GRID
-        for j in range(n + 1):
-            for i in range(n + 1):
-                f.write('v %d %d 0\n' % (i, j))
-        for j in range(n):
-            for i in range(n):
-                a = j * (n + 1) + i + 1
-                f.write('f %d %d %d %d\n' % (a, a + 1, a + n + 2, a + n + 1))
-    with open('field.obj', 'w') as f:
-        n = FIELD
-        for j in range(n + 1):
-            for i in range(n + 1):
-                f.write('v %d %d 0\n' % (i - n // 2, j - n // 2))
-        for j in range(n):
-            for i in range(n):
-                a = j * (n + 1) + i + 1
-                f.write('f %d %d %d %d\n' % (a, a + 1, a + n + 2, a + n + 1))
+    write_grid('grid.obj', GRID, 0)
+    write_grid('field.obj', FIELD, -(FIELD // 2))
+    field = '[[surface]]\nmesh = "field.obj"\ntexel = "bush"\n'
     scenes = {
         'plane.toml': CAMERA % ('0.5, -2, 1.5', '0.5, 0.5, 0') + DIRECTIONAL + '[[surface]]\nmesh = "plane.obj"\n',
         'grid.toml': CAMERA % ('250, -300, 400', '250, 250, 0') + DIRECTIONAL + '[[surface]]\nmesh = "grid.obj"\n',
-        'field_point.toml': CAMERA % ('3, -5, 3.5', '0, 0, 0.5') + POINT + BUSH_TEXEL
-        + '[[surface]]\nmesh = "field.obj"\ntexel = "bush"\n',
-        'field.toml': CAMERA % ('3, -5, 3.5', '0, 0, 0.5') + DIRECTIONAL + BUSH_TEXEL
-        + '[[surface]]\nmesh = "field.obj"\ntexel = "bush"\n',
+        'field_point.toml': CAMERA % ('3, -5, 3.5', '0, 0, 0.5') + POINT + BUSH_TEXEL + field,
+        'field.toml': CAMERA % ('3, -5, 3.5', '0, 0, 0.5') + DIRECTIONAL + BUSH_TEXEL + field,
     }
     for name, text in scenes.items():
         with open(name, 'w') as f:
