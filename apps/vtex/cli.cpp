@@ -1,13 +1,12 @@
 #include "cli.h"
-
-#include <vtex/core/atomic_file.h>
-#include <vtex/core/memory_budget.h>
 #include "registry.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
+#include <vtex/core/memory_budget.h>
 
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <map>
 
