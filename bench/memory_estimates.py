@@ -154,9 +154,9 @@ def main():
     pixels = 4096 * 4096 - 256 * 256
     plane = measured['plane'][3]
     factors = [
-        ('image, bytes a pixel (4096² − 256² renders of plane.toml, EXR and PNG)', '20',
+        ('image, bytes a pixel (4096² − 256² renders of plane.toml, EXR and PNG)', '22',
          (measured['plane4k'][3] - plane) / pixels),
-        ('image with --aov, bytes a pixel (the same)', '28', (measured['plane4kaov'][3] - plane) / pixels),
+        ('image with --aov, bytes a pixel (the same)', '30', (measured['plane4kaov'][3] - plane) / pixels),
         ('base mesh, × its file (grid.obj above plane.toml, %.1f MB)' % (size('grid.obj') / 1e6), '32',
          (measured['grid'][3] - plane) / size('grid.obj')),
         ('octree and source mesh, × their files (field_point.toml above plane.toml, %.1f MB)'
