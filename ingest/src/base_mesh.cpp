@@ -32,6 +32,7 @@ QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& op
         raw = detail::readOffPlyStl(bytes, extension.substr(1), file, options);
     else
         throw InputError(file, "unknown mesh format '" + extension + "'");
+    detail::turnToZUp(raw, options);
 
     for (const auto& t : raw.triangles)
         for (auto v : t)

@@ -34,6 +34,14 @@ TriangleMesh loadText(const std::string& name, const std::string& bytes, IngestR
     return loadMesh(path, options, report);
 }
 
+// The file's own frame: these tests check what the reader does with glTF's nodes and
+// primitives, before any turn of its +Y up to vtex's +Z (Ingest.GltfIsTurnedFromYUpToZUp).
+IngestOptions fileFrame() {
+    IngestOptions options;
+    options.up = 'z';
+    return options;
+}
+
 Eigen::Vector3f faceNormal(const TriangleMesh& m, std::size_t t) {
     const auto& tri = m.triangles[t];
     return (m.positions[tri[1]] - m.positions[tri[0]]).cross(m.positions[tri[2]] - m.positions[tri[0]]).normalized();
@@ -97,6 +105,56 @@ TEST(Ingest, GlbRoundTripIsExactAndCanonical) {
         }
 }
 
+// glTF is +Y up (its specification, §3.4; Blender's exporter writes it): a point (x, y, z) of the
+// file is (x, −z, y) in vtex's +Z-up frame, its normals alike; vtex's own .glb is already +Z up
+// and round-trips unchanged; --up overrides either, for any format.
+TEST(Ingest, GltfIsTurnedFromYUpToZUp) {
+    GltfBuilder b;
+    // A triangle standing in glTF's up direction: its apex at y = 2, its normal +z (toward the
+    // glTF viewer).
+    const int pos = b.positions(std::vector<float>{0, 0, 0, 1, 0, 0, 0, 2, 0});
+    const int nrm = b.accessor(b.view(std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1}), 5126, 3, "VEC3");
+    b.meshNode({{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}}}});
+    IngestReport report;
+    const TriangleMesh m = loadText("standing.gltf", b.gltfEmbedded(), &report);
+    EXPECT_EQ(report.up, 'y');
+    EXPECT_FLOAT_EQ(report.boundsMax.z(), 2.0f);  // the apex is up
+    EXPECT_FLOAT_EQ(report.boundsMax.y(), 0.0f);
+    for (const auto& n : m.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, -1, 0), 1e-6f)) << n.transpose();
+    EXPECT_NE(toJson(report).find("\"up\": \"y\""), std::string::npos);
+    // Written by vtex and read back: the same coordinates, not turned again.
+    const fs::path canonical = tmp("standing-canonical.glb");
+    writeMeshGlb(m, canonical);
+    IngestReport again;
+    EXPECT_EQ(loadMesh(canonical, {}, &again).positions, m.positions);
+    EXPECT_EQ(again.up, 'z');
+    // --up x: +X is turned to +Z, for an OBJ too.
+    IngestOptions xUp;
+    xUp.up = 'x';
+    IngestReport obj;
+    loadText("x-up.obj", "v 0 0 0\nv 3 0 0\nv 0 1 0\nf 1 2 3\n", &obj, xUp);
+    EXPECT_FLOAT_EQ(obj.boundsMax.z(), 3.0f);
+    EXPECT_FLOAT_EQ(obj.boundsMax.x(), 0.0f);
+}
+
+// --fit cell: the largest side of the bounding box becomes 1, centred in x and y, base at z = 0,
+// the same factor on every axis; recorded in the report.
+TEST(Ingest, FitCellScalesUniformlyIntoTheUnitCube) {
+    IngestOptions options;
+    options.fitCell = true;
+    IngestReport report;
+    const TriangleMesh m = loadText("fit.obj", "v 10 20 5\nv 14 20 5\nv 10 22 7\nf 1 2 3\n", &report, options);
+    EXPECT_DOUBLE_EQ(report.fitScale, 0.25);
+    EXPECT_FLOAT_EQ(report.boundsMin.x(), 0.0f);
+    EXPECT_FLOAT_EQ(report.boundsMax.x(), 1.0f);
+    EXPECT_FLOAT_EQ(report.boundsMin.y(), 0.25f);  // 2 of 4 wide, centred
+    EXPECT_FLOAT_EQ(report.boundsMax.y(), 0.75f);
+    EXPECT_FLOAT_EQ(report.boundsMin.z(), 0.0f);
+    EXPECT_FLOAT_EQ(report.boundsMax.z(), 0.5f);
+    for (const auto& p : m.positions) EXPECT_TRUE((p.array() >= 0).all() && (p.array() <= 1).all()) << p.transpose();
+    EXPECT_NE(toJson(report).find("\"cell\""), std::string::npos);
+}
+
 TEST(Ingest, NodeTransformsAreBakedWithNormalsByInverseTranspose) {
     GltfBuilder b;
     const int pos = b.positions(vtex::test::kTriangle);
@@ -107,7 +165,7 @@ TEST(Ingest, NodeTransformsAreBakedWithNormalsByInverseTranspose) {
     b.doc["nodes"] = {{{"translation", {10, 0, 0}}, {"children", {1}}},
                       {{"mesh", 0}, {"rotation", {s, 0, 0, s}}, {"scale", {1, 2, 1}}}};
     b.doc["scenes"] = {{{"nodes", {0}}}};
-    const TriangleMesh m = loadText("trs.gltf", b.gltfEmbedded());
+    const TriangleMesh m = loadText("trs.gltf", b.gltfEmbedded(), nullptr, fileFrame());
     ASSERT_EQ(m.triangles.size(), 1u);
     // (0,1,0) → scale (0,2,0) → rotate about x (0,0,2) → translate (10,0,2).
     bool seen = false;
@@ -123,7 +181,7 @@ TEST(Ingest, MatrixWithMirrorFlipsWinding) {
     const int pos = b.positions(vtex::test::kTriangle);
     b.meshNode({{"attributes", {{"POSITION", pos}}}},
                {{"matrix", {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}}});
-    const TriangleMesh m = loadText("mirror.gltf", b.gltfEmbedded());
+    const TriangleMesh m = loadText("mirror.gltf", b.gltfEmbedded(), nullptr, fileFrame());
     ASSERT_EQ(m.triangles.size(), 1u);
     // Mirrored in x, the triangle still faces +z because its winding was flipped.
     EXPECT_GT(faceNormal(m, 0).z(), 0.99f);
@@ -140,7 +198,7 @@ TEST(Ingest, StripsFansAndNonIndexed) {
         const int idx = b.indices(order);
         b.meshNode({{"attributes", {{"POSITION", pos}}}, {"indices", idx}, {"mode", mode}});
         IngestReport report;
-        const TriangleMesh m = loadText("mode" + std::to_string(mode) + ".glb", b.glb(), &report);
+        const TriangleMesh m = loadText("mode" + std::to_string(mode) + ".glb", b.glb(), &report, fileFrame());
         ASSERT_EQ(m.triangles.size(), 2u) << "mode " << mode;
         for (std::size_t t = 0; t < 2; ++t) EXPECT_GT(faceNormal(m, t).z(), 0.99f) << "mode " << mode;
     }
