@@ -6,6 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 using vtex::test::runVtex;
 
 TEST(Cli, VersionPrintsTheProjectVersion) {
@@ -72,4 +75,23 @@ TEST(Cli, FuzzAnArgumentHoldingANewlineStillGivesAOneLineError) {
     const auto bad = runVtex({"render", "no\nsuch\r.toml", "-o", "x.exr"});
     EXPECT_EQ(bad.exitStatus, 3) << bad.err;
     EXPECT_EQ(vtex::test::lineCount(bad.err), 1u) << bad.err;
+}
+
+// `vtex ingest --up/--fit` (issue 16): a Z-up OBJ read as Y-up and fitted into the cell lands in
+// the unit cube with its old +Y up, and the report says how; an axis that is not one is bad usage.
+TEST(Cli, IngestTurnsAndFitsAsTheFlagsSay) {
+    const std::filesystem::path dir = std::filesystem::path(VTEX_TEST_TMP) / "cli_ingest_up";
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "tall.obj") << "v 0 0 0\nv 1 0 0\nv 0 4 0\nf 1 2 3\n";
+    const auto r = runVtex({"ingest", (dir / "tall.obj").string(), "-o", (dir / "tall.glb").string(), "--report",
+                            (dir / "tall.json").string(), "--up", "y", "--fit", "cell", "-q"});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    const std::string report = vtex::test::readText(dir / "tall.json");
+    EXPECT_NE(report.find("\"up\": \"y\""), std::string::npos) << report;
+    EXPECT_NE(report.find("\"mode\": \"cell\""), std::string::npos) << report;
+    EXPECT_NE(report.find("\"scale\": 0.25"), std::string::npos) << report;
+    const auto bad = runVtex({"ingest", (dir / "tall.obj").string(), "-o", (dir / "bad.glb").string(), "--up", "w"});
+    EXPECT_EQ(bad.exitStatus, 2) << bad.err;
+    EXPECT_NE(bad.err.find("--up"), std::string::npos) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.glb"));
 }
