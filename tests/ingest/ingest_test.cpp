@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -517,6 +519,61 @@ TEST(BaseMesh, QuadsStayQuadsTrianglesCollapse) {
     EXPECT_FALSE(off.isTriangle(1));
     EXPECT_TRUE(off.isTriangle(2));
     for (const auto& n : off.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, 0, 1))) << n.transpose();
+}
+
+// A quad grid exported triangulated (as Blender writes it with "Triangulate Faces") comes back
+// as its quads (issue 16): each pair of triangles on a quad's diagonal is one cell again, starting
+// at its lowest vertex, wound counter-clockwise; triangles that were not a quad stay triangles.
+TEST(BaseMesh, ATriangulatedGridComesBackAsItsQuads) {
+    constexpr int n = 4;
+    std::string obj;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) obj += "v " + std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(0.1 * i * j) + "\n";
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;  // OBJ counts from 1
+            // Alternate the diagonal, as exporters do not all cut the same way.
+            if ((i + j) % 2) obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\nf " +
+                                    std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
+            else obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(d) + "\nf " +
+                        std::to_string(b) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
+        }
+    obj += "v 10 0 0\nv 11 0 0\nv 10 1 0\nf 26 27 28\n";  // a lone triangle
+    test::writeBytes(tmp("triangulated.obj"), obj);
+    const QuadMesh q = loadBaseMesh(tmp("triangulated.obj"));
+    ASSERT_EQ(q.quads.size(), std::size_t(n * n + 1));
+    // Corners by their (x, y), each quad turned to start at its smallest: the reader numbers
+    // vertices in its own order, and a quad may start at any corner.
+    using Corners = std::array<std::pair<float, float>, 4>;
+    const auto canonical = [](Corners c) {
+        std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+        return c;
+    };
+    std::set<Corners> expected, quads;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            expected.insert(canonical({std::pair(float(i), float(j)), std::pair(float(i + 1), float(j)),
+                                       std::pair(float(i + 1), float(j + 1)), std::pair(float(i), float(j + 1))}));
+    int triangles = 0, fanCells = 0;
+    for (std::size_t f = 0; f < q.quads.size(); ++f) {
+        if (q.isTriangle(f)) {
+            ++triangles;
+            continue;
+        }
+        Corners c;
+        for (int k = 0; k < 4; ++k) c[std::size_t(k)] = {q.positions[q.quads[f][std::size_t(k)]].x(), q.positions[q.quads[f][std::size_t(k)]].y()};
+        quads.insert(canonical(c));
+        // A fan pair keeps the quad's own first corner, its lower left here; another pair starts
+        // at its lowest vertex index.
+        const auto& first = q.positions[q.quads[f][0]];
+        const bool lowerLeft = first.x() == std::min({c[0].first, c[1].first, c[2].first, c[3].first}) &&
+                               first.y() == std::min({c[0].second, c[1].second, c[2].second, c[3].second});
+        EXPECT_TRUE(lowerLeft || q.quads[f][0] == *std::min_element(q.quads[f].begin(), q.quads[f].end())) << f;
+        fanCells += lowerLeft;
+    }
+    EXPECT_EQ(quads, expected);
+    EXPECT_GE(fanCells, n * n / 2);  // the odd cells, written as fans, at least
+    EXPECT_EQ(triangles, 1);
 }
 
 }  // namespace
