@@ -5,6 +5,8 @@
 #include <vtex/core/error.h>
 #include <vtex/core/memory_budget.h>
 
+#include <tbb/global_control.h>
+
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -51,6 +53,22 @@ CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::
                         formatBytes(limit) + " here; 0: no limit)")
         ->transform(CLI::AsSizeValue(false));
 }
+
+CLI::Option* addThreadsOption(CLI::App& app, int& threads) {
+    return app.add_option("--threads", threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
+}
+
+struct ThreadControl {
+    tbb::global_control control;
+};
+
+ThreadLimit::ThreadLimit(int threads) {
+    if (threads > 0)
+        mControl = std::make_unique<ThreadControl>(
+            ThreadControl{tbb::global_control(tbb::global_control::max_allowed_parallelism, std::size_t(threads))});
+}
+
+ThreadLimit::~ThreadLimit() = default;
 
 CLI::Validator finiteNumber() {
     return CLI::Validator(

@@ -95,3 +95,27 @@ TEST(Cli, IngestTurnsAndFitsAsTheFlagsSay) {
     EXPECT_NE(bad.err.find("--up"), std::string::npos) << bad.err;
     EXPECT_FALSE(std::filesystem::exists(dir / "bad.glb"));
 }
+
+// `--threads` has one meaning wherever threads are used (issue 17): the workers a command may
+// run at once. The result does not depend on it: a sample and a build with one thread and with
+// two are the same bytes. A negative count is bad usage.
+TEST(Cli, ThreadsLimitTheWorkersAndChangeNoByte) {
+    const std::filesystem::path dir = std::filesystem::path(VTEX_TEST_TMP) / "cli_threads";
+    std::filesystem::create_directories(dir);
+    const std::string mesh = (dir / "bush.glb").string();
+    ASSERT_EQ(runVtex({"pattern", "bush", "--leaves", "60", "-o", mesh, "-q"}).exitStatus, 0);
+    for (const std::string threads : {"1", "2"}) {
+        const std::string vtl = (dir / ("b" + threads + ".vtl")).string(), vto = (dir / ("b" + threads + ".vto")).string();
+        const auto s = runVtex({"sample", mesh, "-o", vtl, "-r", "32", "--threads", threads, "-q"});
+        ASSERT_EQ(s.exitStatus, 0) << s.err;
+        const auto b = runVtex({"build", vtl, "-o", vto, "--threads", threads, "-q"});
+        ASSERT_EQ(b.exitStatus, 0) << b.err;
+    }
+    EXPECT_EQ(vtex::test::readText(dir / "b1.vtl"), vtex::test::readText(dir / "b2.vtl"));
+    EXPECT_EQ(vtex::test::readText(dir / "b1.vto"), vtex::test::readText(dir / "b2.vto"));
+    for (const std::string command : {"sample", "build", "run", "demo"}) {
+        const auto r = runVtex({command, "x", "--threads", "-1"});
+        EXPECT_EQ(r.exitStatus, 2) << command << ": " << r.err;
+        EXPECT_NE(r.err.find("--threads"), std::string::npos) << command << ": " << r.err;
+    }
+}
