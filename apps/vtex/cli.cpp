@@ -7,6 +7,9 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <cctype>
+
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -69,6 +72,17 @@ ThreadLimit::ThreadLimit(int threads) {
 }
 
 ThreadLimit::~ThreadLimit() = default;
+
+void checkImageExtension(const std::string& flag, const std::string& file, const std::vector<std::string>& formats) {
+    std::string extension = std::filesystem::path(file).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (file.empty() || extension.empty()) return;  // a name without one takes the first format
+    for (const std::string& f : formats)
+        if (extension == "." + f) return;
+    std::string expected;
+    for (const std::string& f : formats) expected += (expected.empty() ? "." : " or .") + f;
+    throw CLI::ValidationError(flag, file + ": unknown image format '" + extension + "' (expected " + expected + ")");
+}
 
 CLI::Validator finiteNumber() {
     return CLI::Validator(

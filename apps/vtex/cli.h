@@ -87,6 +87,11 @@ private:
 void checkOutputs(const std::vector<std::pair<std::string, std::string>>& outputs,
                   const std::vector<std::filesystem::path>& inputs);
 
+/// Bad usage (CLI::ValidationError naming `flag`) unless the file name's extension (any case) is
+/// one of `formats` ("exr", "png") or it has none (written in the first): the format an image
+/// output is written in follows its name. An empty name passes (no such output).
+void checkImageExtension(const std::string& flag, const std::string& file, const std::vector<std::string>& formats);
+
 /// Accepts a power of two from 1 to `largest` (voxel resolutions).
 CLI::Validator powerOfTwo(unsigned long long largest);
 

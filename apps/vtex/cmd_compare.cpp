@@ -89,8 +89,8 @@ const bool registered = registerCommand(60, [](CLI::App& app) -> Action {
         if (channelsA != channelsB)
             throw InputError(o->b, "channel sets differ: " + joinNames(channelsA) + " in " + o->a + ", " +
                                        joinNames(channelsB) + " here");
-        const render::Image a = render::readExr(o->a);
-        const render::Image b = render::readExr(o->b);
+        const render::Image a = render::readImage(o->a);
+        const render::Image b = render::readImage(o->b);
         if (a.width != b.width || a.height != b.height)
             throw InputError(o->b, "size " + std::to_string(b.width) + "x" + std::to_string(b.height) +
                                        " differs from " + o->a + " (" + std::to_string(a.width) + "x" +

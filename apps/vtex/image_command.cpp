@@ -9,7 +9,8 @@ namespace vtex::cli {
 
 void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::string& aovHelp) {
     app.add_option("SCENE", args.scene, "The scene file (scene.toml)")->required();
-    app.add_option("-o,--output", args.output, "The linear OpenEXR image to write")->required();
+    app.add_option("-o,--output", args.output, "The image to write, by its extension: .exr (linear OpenEXR) or .png (sRGB)")
+        ->required();
     app.add_option("--png", args.png, "Also write an sRGB PNG preview");
     app.add_option("--width", args.width, "Image width (default: the scene's camera.width)")->check(CLI::Range(1, 16384));
     app.add_option("--height", args.height, "Image height (default: the scene's camera.height)")->check(CLI::Range(1, 16384));
@@ -34,6 +35,10 @@ render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& gl
     render::Scene scene = render::loadScene(args.scene);
     const std::vector<std::filesystem::path> inputs = render::sceneFiles(scene);
     checkOutputs({{"-o", args.output}, {"--png", args.png}, {"--stats", args.stats}}, inputs);
+    // The format follows the name (after the checks above, which say more about a path that is
+    // a directory, a device or an input): a typo is bad usage before any rendering.
+    checkImageExtension("--output", args.output, {"exr", "png"});
+    checkImageExtension("--png", args.png, {"png"});
     for (const auto& w : scene.warnings) warning(global, w);
     return scene;
 }
@@ -46,7 +51,8 @@ void writeImageOutputs(const render::RenderResult& result, const ImageCommandArg
     // All or none (commitAll): a full disk while writing the PNG leaves no EXR either.
     AtomicOutputFile exr(args.output);
     std::optional<AtomicOutputFile> png, stats;
-    render::writeExr(result.image, exr);
+    if (render::imageFormat(args.output) == "png") render::writePng(result.image, exr);
+    else render::writeExr(result.image, exr);
     if (!args.png.empty()) render::writePng(result.image, png.emplace(args.png));
     if (!args.stats.empty()) render::writeStatsJson(result.stats, stats.emplace(args.stats));
     commitAll({&exr, png ? &*png : nullptr, stats ? &*stats : nullptr});

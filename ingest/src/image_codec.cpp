@@ -159,6 +159,15 @@ std::optional<Image> decodeImage(std::string_view bytes, const IngestOptions& op
 
 namespace vtex::ingest {
 
+std::optional<Image> decodePngRgba(std::string_view bytes, std::string& why) {
+    static constexpr unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (bytes.size() < 8 || std::memcmp(bytes.data(), kPng, 8) != 0) {
+        why = "not a PNG";
+        return std::nullopt;
+    }
+    return detail::decodeImage(bytes, IngestOptions{}, why);
+}
+
 std::string encodePng(const Image& image) {
     if (image.width <= 0 || image.height <= 0 ||
         image.rgba.size() != std::size_t(image.width) * image.height * 4)

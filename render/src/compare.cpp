@@ -192,6 +192,7 @@ Image errorHeatMap(const Image& a, const Image& b, double fullScale) {
 }
 
 std::vector<std::string> comparedChannels(const std::filesystem::path& exrFile) {
+    if (imageFormat(exrFile) == "png") return {"A", "B", "G", "R"};  // readPng's, always
     checkInputFile(exrFile, std::uint64_t(4) << 30, "EXR image");  // OpenEXR would hang on a FIFO
     std::vector<std::string> names;
     try {

@@ -15,6 +15,7 @@
 #include <ImfOutputFile.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <ostream>
 #include <stdexcept>
@@ -127,6 +128,37 @@ Image readExr(const std::filesystem::path& file) {
 double linearToSrgb(double x) {
     x = std::clamp(x, 0.0, 1.0);
     return x <= 0.0031308 ? 12.92 * x : 1.055 * std::pow(x, 1 / 2.4) - 0.055;
+}
+
+double srgbToLinear(double x) {
+    x = std::clamp(x, 0.0, 1.0);
+    return x <= 0.04045 ? x / 12.92 : std::pow((x + 0.055) / 1.055, 2.4);
+}
+
+std::string imageFormat(const std::filesystem::path& file) {
+    std::string extension = file.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return extension == ".exr" ? "exr" : extension == ".png" ? "png" : "";
+}
+
+Image readPng(const std::filesystem::path& file) {
+    const std::string bytes = readInputFile(file, std::uint64_t(1) << 30, "PNG image");
+    std::string why;
+    const auto decoded = ingest::decodePngRgba(bytes, why);
+    if (!decoded) throw InputError(file, "cannot read PNG: " + why);
+    Image image(decoded->width, decoded->height, false);
+    for (std::size_t i = 0; i < image.pixels(); ++i) {
+        for (int c = 0; c < 3; ++c) image.rgba[4 * i + std::size_t(c)] = float(srgbToLinear(decoded->rgba[4 * i + std::size_t(c)] / 255.0));
+        image.rgba[4 * i + 3] = float(decoded->rgba[4 * i + 3] / 255.0);
+    }
+    return image;
+}
+
+Image readImage(const std::filesystem::path& file) {
+    const std::string format = imageFormat(file);
+    if (format == "exr") return readExr(file);
+    if (format == "png") return readPng(file);
+    throw InputError(file, "unknown image format '" + file.extension().string() + "' (expected .exr or .png)");
 }
 
 void writePng(const Image& image, const std::filesystem::path& file) {

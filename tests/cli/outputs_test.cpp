@@ -189,3 +189,35 @@ TEST(Outputs, FuzzANameTooLongGetsVtexsOwnOneLineMessage) {
     for (const auto& entry : fs::directory_iterator(s.dir))
         EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
 }
+
+// An image's format follows its name (issue 17): `-o x.png` writes a PNG and `-o x.exr` an EXR,
+// for both renderers; another extension, or `--png` naming a non-PNG, is bad usage before any
+// rendering, and nothing is written. `vtex compare` reads either: an EXR against its own 8-bit
+// sRGB PNG differs by the PNG's rounding alone, at most half a step of 8 bits at the sRGB curve's
+// steepest on [0, 1] (2.4/1.055 × ((1 + 0.055)/1.055)^1.4 = 2.275, times 0.5/255: 0.0045).
+TEST(Outputs, AnImageFormatFollowsItsNameAndCompareReadsBoth) {
+    const Specials s = makeSpecials("image_formats");
+    const fs::path scene = writePlaneScene(s.dir);
+    const auto magic = [](const fs::path& file) { return vtex::test::readText(file).substr(0, 4); };
+    for (const std::string command : {"render", "reference"}) {
+        const fs::path exr = s.dir / (command + ".exr"), png = s.dir / (command + ".PNG");
+        ASSERT_EQ(runVtex({command, scene.string(), "-o", exr.string(), "-q"}).exitStatus, 0);
+        ASSERT_EQ(runVtex({command, scene.string(), "-o", png.string(), "-q"}).exitStatus, 0);
+        EXPECT_EQ(magic(exr), std::string("\x76\x2f\x31\x01", 4)) << command;  // OpenEXR
+        EXPECT_EQ(magic(png), "\x89PNG") << command;
+        const auto c = runVtex({"compare", exr.string(), png.string(), "--json"});
+        ASSERT_EQ(c.exitStatus, 0) << c.err;
+        const double worst = std::stod(c.out.substr(c.out.find("\"error\":") + 8));
+        EXPECT_LE(worst, 0.0045) << c.out;
+        EXPECT_EQ(runVtex({"compare", png.string(), png.string()}).exitStatus, 0);
+        for (const std::vector<std::string>& bad : {std::vector<std::string>{"-o", (s.dir / "x.tif").string()},
+                                                    {"-o", (s.dir / "x.exr").string(), "--png", (s.dir / "y.exr").string()}}) {
+            std::vector<std::string> args{command, scene.string()};
+            args.insert(args.end(), bad.begin(), bad.end());
+            const auto r = runVtex(args);
+            EXPECT_EQ(r.exitStatus, 2) << command << ": " << r.err;
+            EXPECT_NE(r.err.find("unknown image format"), std::string::npos) << r.err;
+            EXPECT_FALSE(fs::exists(s.dir / "x.tif") || fs::exists(s.dir / "x.exr") || fs::exists(s.dir / "y.exr"));
+        }
+    }
+}

@@ -11,6 +11,9 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <optional>
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace vtex::ingest {
@@ -26,6 +29,11 @@ struct Image {
 /// PNG bytes of `image` (8-bit RGBA as stored, so sRGB stays sRGB). Throws std::runtime_error
 /// when its size does not match its pixels or libpng fails.
 std::string encodePng(const Image& image);
+
+/// The 8-bit RGBA pixels of PNG `bytes` (any bit depth or colour type libpng reads), within the
+/// texture limits of the default IngestOptions (16384 a side, 64 Mi pixels, checked before any
+/// pixel is allocated); std::nullopt with the reason in `why` when they are not a PNG or too large.
+std::optional<Image> decodePngRgba(std::string_view bytes, std::string& why);
 
 /// The linear RGB base colour of `image` at texture coordinates (u, v): bilinear, glTF's
 /// default REPEAT wrapping, sRGB decoded before filtering (averaging encoded values would

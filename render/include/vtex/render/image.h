@@ -37,12 +37,22 @@ void writeExr(const Image& image, AtomicOutputFile& out);
 /// Reads an EXR written by writeExr (or any RGBA EXR; missing channels read as 0, A as 1).
 /// Throws vtex::InputError.
 Image readExr(const std::filesystem::path& file);
+/// Reads an 8-bit (or 16-bit) PNG as writePng writes it: colours sRGB-decoded to linear, alpha as
+/// stored, no AOVs. Throws vtex::InputError.
+Image readPng(const std::filesystem::path& file);
+/// readExr or readPng by the file's extension (.exr or .png, any case); another is refused
+/// (vtex::InputError).
+Image readImage(const std::filesystem::path& file);
+/// "exr" or "png" for a file name of that extension (any case), "" otherwise: the image formats
+/// vtex reads and writes (an output named without an extension is written as EXR).
+std::string imageFormat(const std::filesystem::path& file);
 /// Writes an 8-bit sRGB PNG with alpha, colours clamped to [0,1]. Throws vtex::IoError.
 void writePng(const Image& image, const std::filesystem::path& file);
 void writePng(const Image& image, AtomicOutputFile& out);
 
-/// Linear → sRGB transfer function on [0,1].
+/// Linear → sRGB transfer function on [0,1], and its inverse.
 double linearToSrgb(double linear);
+double srgbToLinear(double encoded);
 
 /// Mean of each 2×2 block (the box-downsampled image; width and height are halved, odd ones
 /// rounded down). AOVs are dropped.
