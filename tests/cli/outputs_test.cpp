@@ -143,11 +143,11 @@ TEST(Outputs, ASecondRunOnAFolderInUseIsRefused) {
     EXPECT_FALSE(fs::exists(theirs)) << "the run that holds the lock clears a dead writer's temporaries";
 }
 
-// Found by fuzz_cli.py (fuzz/corpus-cli/regression_3; `vtex inspect`, regression_4, by reading
-// for the same call after): a file name too long for the system made std::filesystem's
-// throwing calls escape with their own message ("filesystem error: status: File name too long
-// [...]"). An output that cannot be created is vtex's failure to write it (exit 1), an input
-// that cannot be found is no such file (exit 3).
+// Found by fuzz_cli.py (fuzz/corpus-cli/regression_3, regression_9; `vtex inspect`,
+// regression_4, by reading for the same call after): a file name too long or a link loop made
+// std::filesystem's throwing calls escape with their own message ("filesystem error: status:
+// File name too long [...]"). An output that cannot be created is vtex's failure to write it
+// (exit 1), an input that cannot be found is no such file (exit 3).
 TEST(Outputs, FuzzANameTooLongGetsVtexsOwnOneLineMessage) {
     const Specials s = makeSpecials("too_long");
     const std::string name = (s.dir / std::string(300, 'a')).string();
@@ -158,6 +158,12 @@ TEST(Outputs, FuzzANameTooLongGetsVtexsOwnOneLineMessage) {
     const auto in = runVtex({"inspect", name + ".vto"});
     EXPECT_EQ(in.exitStatus, 3) << in.err;
     EXPECT_NE(in.err.find(".vto: no such file"), std::string::npos) << in.err;
+    // A link loop in the way (regression_9): no such folder, in vtex's words.
+    fs::create_symlink("loop-b", s.dir / "loop-a");
+    fs::create_symlink("loop-a", s.dir / "loop-b");
+    const auto loop = runVtex({"pattern", "grass", "--count", "4", "-o", (s.dir / "loop-a" / "x.glb").string()});
+    EXPECT_EQ(loop.exitStatus, 1) << loop.err;
+    EXPECT_NE(loop.err.find("x.glb: output directory does not exist"), std::string::npos) << loop.err;
     for (const auto& entry : fs::directory_iterator(s.dir))
         EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
 }
