@@ -73,3 +73,12 @@ TEST(Cli, FuzzAnArgumentHoldingANewlineStillGivesAOneLineError) {
     EXPECT_EQ(bad.exitStatus, 3) << bad.err;
     EXPECT_EQ(vtex::test::lineCount(bad.err), 1u) << bad.err;
 }
+
+// Found by fuzz_cli.py (rechecking the first campaign's flags; fuzz/corpus-cli/regression_10):
+// the unknown-command message (29ee2e2) quotes the argument and was printed without oneLine, so
+// `vtex "new<LF>line.exr" …` split its error over two lines.
+TEST(Cli, FuzzAnUnknownCommandHoldingANewlineIsOneLine) {
+    const auto r = runVtex({"new\nline.exr", "16384", "reference", "scene.toml"});
+    EXPECT_EQ(r.exitStatus, 2) << r.err;
+    EXPECT_EQ(r.err, "vtex: error: unknown command 'new line.exr' (vtex --help lists the commands)\n");
+}
