@@ -150,5 +150,29 @@ TEST(SamplerCli, UsageErrorsAndMemoryLimit) {
     EXPECT_FALSE(fs::exists(never));
 }
 
+// Found by fuzz_cli.py (second campaign, fuzz/corpus-cli/regression_11): `vtex pattern
+// brushed --variant radial --count 2097152` was accepted (the count is checked against 10⁷ only)
+// and grew past 6 GB building about 10⁹ triangles, a mesh no other command would read. A count
+// whose mesh exceeds what ingest accepts (sampler::kMaxPatternTriangles) is bad usage naming
+// the option, refused before the work; one just inside is made.
+TEST(SamplerCli, FuzzAPatternCountTooLargeToIngestIsBadUsage) {
+    const auto glb = tmp("too_many.glb");
+    std::filesystem::remove(glb);
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"pattern", "brushed", "--variant", "radial", "--count", "2097152"},
+          {"pattern", "bush", "--leaves", "10000000"}}) {
+        std::vector<std::string> command = args;
+        command.insert(command.end(), {"-o", glb.string()});
+        const auto r = runVtex(command);
+        EXPECT_EQ(r.exitStatus, 2) << args[1] << ": " << r.err;
+        EXPECT_NE(r.err.find(args[args.size() - 2] + ": " + args.back() + " makes about"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("triangles, more than the 50000000 vtex ingests"), std::string::npos) << r.err;
+        EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+        EXPECT_FALSE(fs::exists(glb));
+    }
+    EXPECT_EQ(runVtex({"pattern", "brushed", "--variant", "radial", "--count", "200", "-o", glb.string()}).exitStatus, 0);
+    EXPECT_TRUE(fs::exists(glb));
+}
+
 }  // namespace
 }  // namespace vtex::test
