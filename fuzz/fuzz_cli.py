@@ -278,8 +278,8 @@ FLAGS = {
                "--max-memory"],
     "build": ["-o", "--output", "--filter", "--tolerance", "--filter-error-samples", "--max-memory", "--source"],
     "inspect": ["--json", "--source"],
-    "render": ["-o", "--output", "--png", "--width", "--height", "--stats", "--threads", "--aov", "--max-memory", "--spp",
-               "--lod-bias", "--shadow-refresh", "--exact", "--hybrid", "--shading"],
+    "render": ["-o", "--output", "--png", "--width", "--height", "--stats", "--threads", "--aov", "--max-memory",
+               "--spp", "--lod-bias", "--shadow-refresh", "--exact", "--hybrid", "--shading"],
     "reference": ["-o", "--output", "--png", "--width", "--height", "--stats", "--threads", "--aov", "--spp",
                   "--mode", "--tolerance", "--max-memory"],
     "compare": ["--json", "--diff"],
@@ -738,10 +738,10 @@ def signature(argv, status, stderr, verdict):
 
 
 def examine(args, execute, work):
-    """Each timeout and memory finding once more, with the given vtex and limits: what it needs
-    without the sanitizers, and whether it finishes."""
+    """Each timeout, budget run and memory finding once more, with the given vtex and limits:
+    what it needs without the sanitizers, and whether it finishes."""
     cases = []
-    for folder, prefix in (("timeouts", "timeout-"), ("findings", "memory-")):
+    for folder, prefix in (("timeouts", "timeout-"), ("timeouts", "budget-"), ("findings", "memory-")):
         path = os.path.join(work, folder)
         for name in sorted(os.listdir(path)) if os.path.isdir(path) else []:
             if name.startswith(prefix):
@@ -813,7 +813,7 @@ def main():
                     help="run every finding of these earlier campaigns' work folders again and write "
                          "rechecked.json into --work (exit 1 if any is still a finding)")
     ap.add_argument("--fail-on-findings", action="store_true",
-                    help="exit 1 when a run is a finding other than a timeout or the memory limit (smoke run)")
+                    help="exit 1 when a run is a finding (not a timeout or a budget run; the smoke run)")
     args = ap.parse_args()
 
     STRUCTURED[0] = args.structured
@@ -929,9 +929,9 @@ def main():
                 stats[counter] = stats.get(counter, 0) + 1
                 n = stats[counter]
             else:
-                # A run over the memory limit is a finding to examine like a timeout: a 16384²
-                # render needs gigabytes legitimately. The smoke run fails on the others only.
-                any_finding = any_finding or category != "memory"
+                # A 16384² render needs gigabytes legitimately; budget_verdict tells it apart (a
+                # "budget" run, above), so what is left over the limit is a finding too.
+                any_finding = True
                 stats["findings"][category] = stats["findings"].get(category, 0) + 1
                 n = sum(stats["findings"].values())
                 kind = (category, re.sub(r"\d+", "N", reason), command_of(argv))
