@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 namespace vtex::cli {
 namespace {
@@ -55,6 +56,10 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         checkOutputPath(flags->output, {flags->input, flags->source});  // before any work (atomic_file.h)
         checkMemoryEstimate(flags->input, "building its octree", octree::estimateBuildMemory(flags->input),
                             flags->maxMemory);
+        // The source is read before the octree is written: a bad --source left the octree
+        // behind with exit 3 (found by fuzz_cli.py). It is checked with -q too, unmeasured.
+        std::optional<ingest::TriangleMesh> source;
+        if (!flags->source.empty()) source = ingest::loadMesh(flags->source);
         const auto start = std::chrono::steady_clock::now();
         const octree::SparseVolume volume = octree::readVtl(flags->input);
         octree::BuildOptions options;
@@ -70,8 +75,8 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
                       flags->input.c_str(), tree.levelCount(), (unsigned long long)tree.storedNodes(),
                       100.0 * tree.compression(), seconds, flags->output.c_str());
         status(global, line);
-        if (!flags->source.empty() && global.verbosity() != Verbosity::Quiet)
-            printFidelity(render::measureSourceFidelity(tree, ingest::loadMesh(flags->source)), flags->source, std::cerr);
+        if (source && global.verbosity() != Verbosity::Quiet)
+            printFidelity(render::measureSourceFidelity(tree, *source), flags->source, std::cerr);
     };
 });
 

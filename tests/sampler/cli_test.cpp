@@ -174,5 +174,31 @@ TEST(SamplerCli, FuzzAPatternCountTooLargeToIngestIsBadUsage) {
     EXPECT_TRUE(fs::exists(glb));
 }
 
+// Found by fuzz_cli.py (third campaign; fuzz/corpus-cli/regression_12): `vtex build IN -o
+// out.vto --source small.exr` wrote the octree, then read the source and exited 3, leaving
+// out.vto behind; a missing source did the same, and with -q the source was not read at all.
+// The source is read before any output is written.
+TEST(SamplerCli, FuzzABadBuildSourceLeavesNoOctree) {
+    const auto glb = tmp("build_source.glb"), vtl = tmp("build_source.vtl"), vto = tmp("build_source.vto");
+    ASSERT_EQ(runVtex({"pattern", "bush", "--count", "40", "-o", glb.string()}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"sample", glb.string(), "-o", vtl.string(), "-r", "8"}).exitStatus, 0);
+    std::ofstream(tmp("not_a_mesh.exr")) << "x";
+    for (const std::vector<std::string>& extra :
+         {std::vector<std::string>{"--source", tmp("not_a_mesh.exr").string()},
+          {"--source", tmp("missing.glb").string()},
+          {"-q", "--source", tmp("missing.glb").string()}}) {
+        fs::remove(vto);
+        std::vector<std::string> args = {"build", vtl.string(), "-o", vto.string()};
+        args.insert(args.end(), extra.begin(), extra.end());
+        const auto r = runVtex(args);
+        EXPECT_EQ(r.exitStatus, 3) << extra.back() << ": " << r.err;
+        EXPECT_NE(r.err.find("vtex: error: " + extra.back() + ": "), std::string::npos) << r.err;
+        EXPECT_EQ(lineCount(r.err), 1u) << r.err;  // no status line: nothing was built
+        EXPECT_FALSE(fs::exists(vto)) << "the octree was left behind: " << extra.back();
+    }
+    EXPECT_EQ(runVtex({"build", vtl.string(), "-o", vto.string(), "--source", glb.string()}).exitStatus, 0);
+    EXPECT_TRUE(fs::exists(vto));
+}
+
 }  // namespace
 }  // namespace vtex::test
