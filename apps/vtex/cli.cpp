@@ -6,10 +6,13 @@
 
 #include <vtex/core/error.h>
 
+#include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <cmath>
 #include <iostream>
 #include <map>
+#include <system_error>
 
 #include <unistd.h>
 
@@ -43,6 +46,27 @@ const Inspector* findInspector(const std::string& extension) {
     return found == registry.end() ? nullptr : &found->second;
 }
 
+namespace {
+
+// CLI11's size conversion refuses "16EiB" as an overflow but saturates a plain number past
+// 2⁶⁴ − 1: `--max-memory 18446744073709551616` was taken for 16 EiB, no limit (found by
+// fuzz_cli.py). The number in front of the unit must fit in 64 bits.
+CLI::Validator sizeNumberFits() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            const char* begin = text.data() + std::min(text.find_first_not_of(" \t"), text.size());
+            const char* end = begin;
+            while (end < text.data() + text.size() && *end >= '0' && *end <= '9') ++end;
+            std::uint64_t value = 0;
+            if (std::from_chars(begin, end, value).ec == std::errc::result_out_of_range)
+                return "the number " + std::string(begin, end) + " is more than 2^64 - 1";
+            return {};
+        },
+        "");
+}
+
+}  // namespace
+
 CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::string& work) {
     limit = defaultMemoryLimit();
     return app
@@ -50,7 +74,8 @@ CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::
                     "Refuse before starting if " + work +
                         " is estimated to exceed this (e.g. 4GiB, 512MB; default half of this machine's memory, " +
                         formatBytes(limit) + " here; 0: no limit)")
-        ->transform(CLI::AsSizeValue(false));
+        ->transform(CLI::AsSizeValue(false))
+        ->transform(sizeNumberFits());  // a transform goes first: it sees the text as given
 }
 
 CLI::Validator finiteNumber() {

@@ -125,6 +125,35 @@ TEST(MemoryLimit, EveryCommandRefusesWorkOverItsLimit) {
     EXPECT_EQ(runVtex({"run", b.pipeline.string(), "-o", (b.dir / "run").string()}).exitStatus, 0);
 }
 
+// Found by fuzz_cli.py (third campaign, fuzz/corpus-cli/regression_13): CLI11 refused
+// `--max-memory 16EiB` as an overflow but saturated a plain number past 2⁶⁴ − 1, so
+// `--max-memory 18446744073709551616` meant no limit (the campaign's `sample -r 65536` with it
+// ran to 3 GiB and was killed). Now bad usage naming the option, for every command; the work
+// asked for here is small, so that without the check each would simply succeed.
+TEST(MemoryLimit, FuzzALimitPast64BitsIsBadUsage) {
+    const BushScene b = bushScene("past_64_bits");
+    const fs::path out = b.dir / "never";
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"sample", b.glb.string(), "-o", out.string(), "-r", "8"},
+          {"build", b.vtl.string(), "-o", out.string()},
+          {"render", b.scene.string(), "-o", out.string()},
+          {"run", b.pipeline.string(), "-o", out.string()}}) {
+        for (const std::string limit : {"18446744073709551616", "99999999999999999999MB"}) {
+            std::vector<std::string> command = args;
+            command.insert(command.end(), {"--max-memory", limit});
+            const auto r = runVtex(command);
+            EXPECT_EQ(r.exitStatus, 2) << args[0] << " " << limit << ": " << r.err;
+            EXPECT_NE(r.err.find("--max-memory: the number " + limit.substr(0, 20) + " is more than 2^64 - 1"),
+                      std::string::npos)
+                << r.err;
+            EXPECT_FALSE(fs::exists(out)) << args[0];
+        }
+    }
+    // The largest number that fits is a limit like any other.
+    const auto largest = runVtex({"build", b.vtl.string(), "-o", out.string(), "--max-memory", "18446744073709551615"});
+    EXPECT_EQ(largest.exitStatus, 0) << largest.err;
+}
+
 // The estimates bound the measured peak resident memory on the bush, and stay within a small
 // factor of it (an estimate ten times too high would refuse work the machine can do).
 TEST(MemoryLimit, EstimatesBoundTheMeasuredPeak) {
