@@ -708,7 +708,9 @@ def classify(argv, status, stdout, stderr, verdict, before, after, peak=0):
         elif after[name] != entry:
             findings.append(("fixture", f"{name} changed or replaced"))
     new = sorted(set(after) - set(before))
-    tmp = [n for n in new if ".tmp." in os.path.basename(n)]
+    # A leftover temporary is named ".<output>.tmp.<host>.<pid>…"; an output the user named with
+    # ".tmp." in it (`-o out.glb.tmp.x`, third campaign) is not one.
+    tmp = [n for n in new if ".tmp." in os.path.basename(n) and n not in asked]
     if tmp:
         findings.append(("tmp", "left " + ", ".join(tmp[:5])))
     command = command_of(argv)
