@@ -78,6 +78,18 @@ CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::
         ->transform(sizeNumberFits());  // a transform goes first: it sees the text as given
 }
 
+CLI::Validator seedNumber() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            std::int64_t value = 0;
+            const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+            if (error != std::errc() || end != text.data() + text.size() || value < 0)
+                return "must be an integer from 0 to 9223372036854775807 (2^63 - 1)";
+            return {};
+        },
+        "SEED");
+}
+
 CLI::Validator finiteNumber() {
     return CLI::Validator(
         [](std::string& text) -> std::string {

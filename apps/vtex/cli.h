@@ -59,6 +59,11 @@ const Inspector* findInspector(const std::string& extension);
 /// and an infinite or NaN flag would reach the stages as a value. Checked before any range.
 CLI::Validator finiteNumber();
 
+/// Accepts a seed: a whole number from 0 to 2⁶³ − 1, what a pipeline file can hold (TOML integers
+/// are signed 64-bit). CLI11 took `--seed -1` for 2⁶⁴ − 1 and saturated larger numbers; `vtex
+/// demo --seed -1` wrote a pipeline it then could not read (found by fuzz_cli.py).
+CLI::Validator seedNumber();
+
 /// `--max-memory SIZE` into `limit`, which starts at vtex::defaultMemoryLimit() (half of this
 /// machine's physical memory): a resolution, image or volume too large for it is refused at once
 /// with its estimate (exit 3) instead of running into the kernel's OOM killer. `work` says what

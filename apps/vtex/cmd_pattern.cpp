@@ -29,7 +29,9 @@ const bool registered = registerCommand(15, [](CLI::App& app) -> Action {
         ->required()
         ->check(CLI::IsMember(sampler::patternNames()));
     app.add_option("-o,--output", flags->output, "Mesh to write (.glb)")->required();
-    app.add_option("--seed", flags->options.seed, "Random seed (same seed, same mesh)")->capture_default_str();
+    app.add_option("--seed", flags->options.seed, "Random seed (same seed, same mesh)")
+        ->check(seedNumber())
+        ->capture_default_str();
     app.add_option("--count", flags->options.count,
                    "Number of elements (grass 16 blades, bush 2000 leaves, fur 300 hairs, brushed 9 "
                    "rings or 24 spokes, blocks 24); 0 = default")
