@@ -49,12 +49,14 @@ const Inspector* findInspector(const std::string& extension) {
 namespace {
 
 // CLI11's size conversion refuses "16EiB" as an overflow but saturates a plain number past
-// 2⁶⁴ − 1: `--max-memory 18446744073709551616` was taken for 16 EiB, no limit (found by
-// fuzz_cli.py). The number in front of the unit must fit in 64 bits.
+// 2⁶⁴ − 1 and wraps a negative one: `--max-memory 18446744073709551616` and `--max-memory -1`
+// were taken for 16 EiB, no limit (found by fuzz_cli.py). The number in front of the unit must
+// fit in 64 bits, unsigned.
 CLI::Validator sizeNumberFits() {
     return CLI::Validator(
         [](std::string& text) -> std::string {
             const char* begin = text.data() + std::min(text.find_first_not_of(" \t"), text.size());
+            if (begin < text.data() + text.size() && *begin == '-') return "a size cannot be negative";
             const char* end = begin;
             while (end < text.data() + text.size() && *end >= '0' && *end <= '9') ++end;
             std::uint64_t value = 0;
