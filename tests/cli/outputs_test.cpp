@@ -167,3 +167,26 @@ TEST(Outputs, FuzzANameTooLongGetsVtexsOwnOneLineMessage) {
     for (const auto& entry : fs::directory_iterator(s.dir))
         EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
 }
+
+// Found by fuzz_cli.py (third campaign, fuzz/corpus-cli/regression_16, a timeout): `vtex sample
+// hill.obj -r 4096 -o missing/x.vtl` sampled for 20 s and more before finding, on writing, that
+// the output's folder does not exist (exit 1). A new path in a missing folder (or behind a file
+// or a link loop) is refused before any work: here before the memory estimate that would refuse
+// the work itself (exit 3), which came first.
+TEST(Outputs, FuzzAnOutputInAMissingFolderIsRefusedBeforeAnyWork) {
+    const Specials s = makeSpecials("missing_folder");
+    const fs::path scene = writePlaneScene(s.dir);
+    std::ofstream(s.dir / "not-a-folder") << "x";
+    for (const std::string folder : {"missing", "not-a-folder"}) {
+        const std::string out = (s.dir / folder / "x.out").string();
+        for (const std::vector<std::string>& args :
+             {std::vector<std::string>{"sample", (s.dir / "plane.obj").string(), "-o", out, "-r", "1048576"},
+              {"render", scene.string(), "-o", out, "--width", "16384", "--height", "16384", "--max-memory", "1MiB"},
+              {"pattern", "brushed", "-o", out, "--count", "10000000"}}) {
+            const auto r = runVtex(args);
+            EXPECT_EQ(r.exitStatus, 1) << args[0] << ": " << r.err;
+            EXPECT_EQ(r.err, "vtex: error: " + out + ": output directory does not exist\n") << args[0];
+        }
+    }
+    EXPECT_FALSE(fs::exists(s.dir / "missing"));
+}
