@@ -11,7 +11,9 @@
 #include <cstdio>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <map>
+#include <string>
 #include <system_error>
 
 #include <unistd.h>
@@ -80,16 +82,21 @@ CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::
         ->transform(sizeNumberFits());  // a transform goes first: it sees the text as given
 }
 
-CLI::Validator seedNumber() {
+CLI::Validator wholeNumber(std::uint64_t least, std::uint64_t most) {
     return CLI::Validator(
-        [](std::string& text) -> std::string {
-            std::int64_t value = 0;
-            const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-            if (error != std::errc() || end != text.data() + text.size() || value < 0)
-                return "must be an integer from 0 to 9223372036854775807 (2^63 - 1)";
+        [least, most](std::string& text) -> std::string {
+            std::uint64_t value = 0;
+            const char* last = text.data() + text.size();
+            const auto [end, error] = std::from_chars(text.data(), last, value);
+            if (text.empty() || text[0] == '-' || error != std::errc() || end != last || value < least || value > most)
+                return "must be a whole number from " + std::to_string(least) + " to " + std::to_string(most);
             return {};
         },
-        "SEED");
+        "");
+}
+
+CLI::Validator seedNumber() {
+    return wholeNumber(0, std::uint64_t(std::numeric_limits<std::int64_t>::max())).description("SEED");
 }
 
 CLI::Validator finiteNumber() {

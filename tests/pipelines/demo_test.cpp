@@ -93,7 +93,7 @@ TEST(Demo, FuzzASeedAPipelineCannotHoldIsBadUsage) {
                                                      {"pattern", "grass", "-o", glb, "--seed", seed}}) {
             const auto r = runVtex(args);
             EXPECT_EQ(r.exitStatus, 2) << args[0] << " --seed " << seed << ": " << r.err;
-            EXPECT_NE(r.err.find("--seed: must be an integer from 0 to 9223372036854775807"), std::string::npos) << r.err;
+            EXPECT_NE(r.err.find("--seed: must be a whole number from 0 to 9223372036854775807"), std::string::npos) << r.err;
         }
         EXPECT_FALSE(fs::exists(dir)) << seed;
         EXPECT_FALSE(fs::exists(glb)) << seed;
