@@ -246,8 +246,13 @@ def classify(argv, status, stdout, stderr, verdict, before, after, peak=0):
     if tmp:
         findings.append(("tmp", "left " + ", ".join(tmp[:5])))
     command = command_of(argv)
-    refused = status in (2, 3) or (status == 1 and command not in ("run", "demo"))
     outputs = [n for n in new if n not in tmp]
+    # run and demo keep the stages that finished when one fails (exit 1), and when one is
+    # refused as bad input once running (exit 3: `run … --max-memory 1`, whose sample stages are
+    # refused by their estimates after the sources ran; third campaign), which is when they write
+    # their report. A pipeline refused when read leaves nothing (regression_1).
+    staged = command in ("run", "demo") and any(os.path.basename(n) == "report.json" for n in outputs)
+    refused = status == 2 or (status == 3 and not staged) or (status == 1 and command not in ("run", "demo"))
     if verdict is None and refused and outputs:
         findings.append(("output", f"exit {status} left " + ", ".join(outputs[:5])))
     return findings
