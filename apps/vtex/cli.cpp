@@ -1,15 +1,16 @@
 #include "cli.h"
-
-#include <vtex/core/atomic_file.h>
-#include <vtex/core/memory_budget.h>
 #include "registry.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
+#include <vtex/core/memory_budget.h>
+
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <charconv>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <limits>
 #include <map>
@@ -98,6 +99,22 @@ CLI::Validator wholeNumber(std::uint64_t least, std::uint64_t most) {
 CLI::Validator seedNumber() {
     return wholeNumber(0, std::uint64_t(std::numeric_limits<std::int64_t>::max())).description("SEED");
 }
+
+CLI::Option* addThreadsOption(CLI::App& app, int& threads) {
+    return app.add_option("--threads", threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
+}
+
+struct ThreadControl {
+    tbb::global_control control;
+};
+
+ThreadLimit::ThreadLimit(int threads) {
+    if (threads > 0)
+        mControl = std::make_unique<ThreadControl>(
+            ThreadControl{tbb::global_control(tbb::global_control::max_allowed_parallelism, std::size_t(threads))});
+}
+
+ThreadLimit::~ThreadLimit() = default;
 
 CLI::Validator finiteNumber() {
     return CLI::Validator(

@@ -74,6 +74,22 @@ CLI::Validator seedNumber();
 /// is estimated ("the sampler's footprint").
 CLI::Option* addMaxMemoryOption(CLI::App& app, std::uint64_t& limit, const std::string& work);
 
+/// `--threads N` into `threads`, one meaning for every command that uses threads: the worker
+/// threads it may run at once, 0 (the default) all cores.
+CLI::Option* addThreadsOption(CLI::App& app, int& threads);
+
+/// Holds the process's TBB workers to `threads` while it lives (tbb::global_control); 0: no limit.
+class ThreadLimit {
+public:
+    explicit ThreadLimit(int threads);
+    ~ThreadLimit();
+    ThreadLimit(const ThreadLimit&) = delete;
+    ThreadLimit& operator=(const ThreadLimit&) = delete;
+
+private:
+    std::unique_ptr<struct ThreadControl> mControl;
+};
+
 /// A command's output files, each as (flag, path), checked before any work: every non-empty
 /// path with checkOutputPath against `inputs` (exit 3), and no two flags naming one file (bad
 /// usage, exit 2: `-o a.exr --png a.exr` would write both and keep the second).

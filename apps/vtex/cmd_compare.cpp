@@ -1,6 +1,7 @@
 // `vtex compare a.exr b.exr [--json] [--diff heat.png]`: RMSE, PSNR and SSIM between two images, the
 // channel means and a's bias against b, and the RMSE split into 4×4-block and pixel scales.
 #include "cli.h"
+#include "json_number.h"
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
@@ -25,15 +26,9 @@ std::string joinNames(const std::vector<std::string>& names) {
     return joined.empty() ? "none" : joined;
 }
 
-// JSON has no NaN or infinity: such a value is null (a bias against a black channel, the PSNR
-// of identical images).
-nlohmann::json finiteOrNull(double value) {
-    return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
-
 nlohmann::json triple(const std::array<double, 3>& v, bool nullable) {
     nlohmann::json j = nlohmann::json::array();
-    for (double x : v) j.push_back(nullable ? finiteOrNull(x) : nlohmann::json(x));
+    for (double x : v) j.push_back(nullable ? jsonNumber(x) : nlohmann::json(x));
     return j;
 }
 
@@ -43,7 +38,7 @@ nlohmann::json toJson(const render::ImageComparison& c, const std::string& a, co
             {"width", c.width},
             {"height", c.height},
             {"rmse", c.rmse},
-            {"psnr", finiteOrNull(c.psnr)},
+            {"psnr", jsonNumber(c.psnr)},
             {"ssim", c.ssim},
             {"worst_pixel", {{"x", c.worstX}, {"y", c.worstY}, {"error", c.worstError}}},
             {"mean_a", triple(c.meanA, false)},

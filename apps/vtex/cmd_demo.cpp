@@ -28,7 +28,10 @@ const bool registered = registerCommand(90, [](CLI::App& app) -> Action {
         ->capture_default_str();
     app.add_flag("--force", options->force, "Redo every stage, cached or not");
     app.add_option("--jobs", options->run.jobs, "Stages run at once (0: as many as cores)")->check(CLI::Range(0, 1024));
-    return [options](const GlobalOptions& global) {
+    auto threads = std::make_shared<int>(0);
+    addThreadsOption(app, *threads);
+    return [options, threads](const GlobalOptions& global) {
+        const ThreadLimit threadLimit(*threads);
         options->run.log = [&global](const std::string& line) { status(global, line); };
         const pipelines::RunReport report = pipelines::runDemo(*options);
         std::cout << pipelines::formatDemoReport(report);

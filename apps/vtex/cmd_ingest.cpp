@@ -21,6 +21,8 @@ const bool registered = registerCommand(10, [](CLI::App& app) -> Action {
         std::string input;
         std::string output;
         std::string report;
+        std::string up;
+        std::string fit = "keep";
         ingest::IngestOptions options;
     };
     auto flags = std::make_shared<Flags>();
@@ -36,6 +38,15 @@ const bool registered = registerCommand(10, [](CLI::App& app) -> Action {
         ->check(finiteNumber())
         ->capture_default_str()
         ->check(CLI::Range(0.0, 0.01));
+    app.add_option("--up", flags->up,
+                   "The file's up axis, turned to vtex's +Z (default: the format's own, +Y for glTF "
+                   "except vtex's own .glb, +Z for OBJ, OFF, PLY and STL)")
+        ->check(CLI::IsMember({"x", "y", "z"}));
+    app.add_option("--fit", flags->fit,
+                   "keep the coordinates, or scale uniformly into the unit cell, centred in x and y "
+                   "with the base at z = 0 (cell)")
+        ->check(CLI::IsMember({"keep", "cell"}))
+        ->capture_default_str();
     app.add_flag("--drop-invalid", flags->options.dropInvalidFaces,
                  "Drop faces with an index out of range or a NaN/Inf coordinate (counted in the "
                  "report) instead of refusing the file");
@@ -45,6 +56,8 @@ const bool registered = registerCommand(10, [](CLI::App& app) -> Action {
         TerminalProgress progress(global);
         ingest::IngestOptions options = flags->options;
         options.progress = &progress;
+        options.up = flags->up.empty() ? 0 : flags->up[0];
+        options.fitCell = flags->fit == "cell";
         ingest::IngestReport report;
         const ingest::TriangleMesh mesh = ingest::loadMesh(flags->input, options, &report);
         // All or none (commitAll): a report that cannot be written leaves no mesh either.

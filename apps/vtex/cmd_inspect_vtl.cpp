@@ -1,6 +1,7 @@
 // `vtex inspect leaves.vtl [--json]`: what a sampled volume holds.
 #include "cli.h"
 #include "inspect_checksums.h"
+#include "json_number.h"
 
 #include <vtex/core/error.h>
 #include <vtex/octree/volume.h>
@@ -14,9 +15,6 @@
 
 namespace vtex::cli {
 namespace {
-
-// JSON has no NaN or infinity.
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 void inspectVtl(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out) {
     const bool json = options.json;
@@ -57,19 +55,19 @@ void inspectVtl(const std::filesystem::path& file, const InspectOptions& options
                             {"resolution", info.resolution()},
                             {"levels", L + 1},
                             {"cyclic", info.cyclic},
-                            {"scale", number(info.scale)},
-                            {"offset", {number(info.offset[0]), number(info.offset[1]), number(info.offset[2])}},
+                            {"scale", jsonNumber(info.scale)},
+                            {"offset", {jsonNumber(info.offset[0]), jsonNumber(info.offset[1]), jsonNumber(info.offset[2])}},
                             {"source_triangles", info.sourceTriangles},
-                            {"source_area", number(info.sourceArea)},
+                            {"source_area", jsonNumber(info.sourceArea)},
                             {"surface_voxels", surface},
-                            {"sampled_area", number(surfaceArea)},
+                            {"sampled_area", jsonNumber(surfaceArea)},
                             {"solid_blocks", solidBlocks},
-                            {"solid_voxels", number(solidVoxels)},
-                            {"solid_density", number(info.solidDensity)},
-                            {"mean_density", number(mass / n3)},
+                            {"solid_voxels", jsonNumber(solidVoxels)},
+                            {"solid_density", jsonNumber(info.solidDensity)},
+                            {"mean_density", jsonNumber(mass / n3)},
                             {"occupied_bounds", nullptr},
-                            {"fit_error", {{"mean", number(info.fitError.mean)},
-                                           {"max", number(info.fitError.max)},
+                            {"fit_error", {{"mean", jsonNumber(info.fitError.mean)},
+                                           {"max", jsonNumber(info.fitError.max)},
                                            {"samples", info.fitError.samples}}},
                             {"checksums", checksumsJson(check)}};
         if (!volume.blocks.empty()) j["occupied_bounds"] = {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};

@@ -3,6 +3,7 @@
 #include "cli.h"
 #include "fidelity_report.h"
 #include "inspect_checksums.h"
+#include "json_number.h"
 
 #include <vtex/core/error.h>
 #include <vtex/ingest/ingest.h>
@@ -10,7 +11,6 @@
 #include <vtex/octree/octree.h>
 #include <vtex/render/source_visibility.h>
 
-#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -19,9 +19,6 @@
 
 namespace vtex::cli {
 namespace {
-
-// JSON has no NaN or infinity.
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 // Per level, against the source mesh (render::measureSourceFidelity); empty without a source.
 render::SourceFidelity measuresAgainstSource(const octree::Octree& tree, const std::filesystem::path& source) {
@@ -49,10 +46,10 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                               {"resolution", 1u << l},
                               {"stored_nodes", s.storedNodes},
                               {"occupied_nodes", s.occupiedNodes},
-                              {"mean_density", number(s.meanDensity)},
-                              {"mean_occupied_density", number(s.meanOccupiedDensity)},
-                              {"filter_error", {{"mean", number(s.filterErrorMean)},
-                                                {"max", number(s.filterErrorMax)},
+                              {"mean_density", jsonNumber(s.meanDensity)},
+                              {"mean_occupied_density", jsonNumber(s.meanOccupiedDensity)},
+                              {"filter_error", {{"mean", jsonNumber(s.filterErrorMean)},
+                                                {"max", jsonNumber(s.filterErrorMax)},
                                                 {"samples", s.filterErrorSamples}}}});
         }
         const nlohmann::json j = {{"file", file.string()},
@@ -62,13 +59,13 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                                   {"levels", tree.levelCount()},
                                   {"cyclic", info.source.cyclic},
                                   {"filter", std::string(octree::filterRuleName(info.rule))},
-                                  {"tolerance", number(info.tolerance)},
+                                  {"tolerance", jsonNumber(info.tolerance)},
                                   {"stored_nodes", tree.storedNodes()},
-                                  {"compression", number(tree.compression())},
+                                  {"compression", jsonNumber(tree.compression())},
                                   {"source_triangles", info.source.sourceTriangles},
-                                  {"source_area", number(info.source.sourceArea)},
-                                  {"fit_error", {{"mean", number(info.source.fitError.mean)},
-                                                 {"max", number(info.source.fitError.max)},
+                                  {"source_area", jsonNumber(info.source.sourceArea)},
+                                  {"fit_error", {{"mean", jsonNumber(info.source.fitError.mean)},
+                                                 {"max", jsonNumber(info.source.fitError.max)},
                                                  {"samples", info.source.fitError.samples}}},
                                   {"per_level", levels},
                                   {"checksums", checksumsJson(check)}};

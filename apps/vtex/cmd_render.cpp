@@ -17,6 +17,7 @@ struct RenderArgs : ImageCommandArgs {
     std::string shading = "fast";
     double shadowRefresh = 1;
     std::string hybrid = "on";
+    std::string levelFit = "on";
     bool exact = false;
 };
 
@@ -46,6 +47,11 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
                    "(on, the default, for texels with a source) or always march the volume (off)")
         ->check(CLI::IsMember({"on", "off"}))
         ->capture_default_str();
+    app.add_option("--level-fit", a->levelFit,
+                   "Scale each level's density so that it lets through, across the shell, what the texel's source "
+                   "mesh does (on, the default, for texels with a source; measured at load) or keep the filtered densities (off)")
+        ->check(CLI::IsMember({"on", "off"}))
+        ->capture_default_str();
     app.add_option("--shading", a->shading, "Micro-primitive reflectance: fast (SGGX visible-normal quadrature) or reference (the paper's integration)")
         ->check(CLI::IsMember({"fast", "reference"}))
         ->capture_default_str();
@@ -59,6 +65,7 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         if (a->exact) options.approximations = render::ApproximationBudget::exact();
         else options.approximations.shadowRefresh = a->shadowRefresh;
         options.hybrid = a->hybrid == "on";
+        options.fitLevels = a->levelFit == "on";
         TerminalProgress progress(global);
         const render::RenderResult result = render::renderScene(scene, options, progress);
         writeImageOutputs(result, *a);

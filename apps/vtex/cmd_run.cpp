@@ -18,6 +18,7 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         bool force = false;
         int jobs = 0;
         std::uint64_t maxMemory = 0;
+        int threads = 0;
         bool wait = false;
     };
     auto o = std::make_shared<Options>();
@@ -26,8 +27,10 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
     app.add_flag("--force", o->force, "Redo every stage, cached or not");
     app.add_option("--jobs", o->jobs, "Stages run at once (0: as many as cores)")->check(CLI::Range(0, 1024));
     addMaxMemoryOption(app, o->maxMemory, "a stage, together with those running beside it,");
+    addThreadsOption(app, o->threads);
     app.add_flag("--wait", o->wait, "When another run holds the output folder, wait until it ends (default: refuse)");
     return [o](const GlobalOptions& global) {
+        const ThreadLimit threadLimit(o->threads);
         const pipelines::Pipeline pipeline = pipelines::loadPipeline(o->file);
         for (const auto& w : pipeline.warnings) warning(global, w);
         pipelines::RunOptions options;

@@ -27,6 +27,7 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         std::string bounds = "auto";
         double solidDensity = 0;
         std::uint64_t maxMemory = 0;
+        int threads = 0;
     };
     auto flags = std::make_shared<Flags>();
     app.add_option("MESH", flags->input, "Source mesh (.glb, or anything `vtex ingest` reads)")->required();
@@ -46,7 +47,9 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         ->capture_default_str()
         ->check(CLI::IsMember({"auto", "unit", "fit"}));
     addMaxMemoryOption(app, flags->maxMemory, "the sampler's footprint");
+    addThreadsOption(app, flags->threads);
     return [flags](const GlobalOptions& global) {
+        const ThreadLimit threadLimit(flags->threads);
         checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
         const auto start = std::chrono::steady_clock::now();
         const ingest::TriangleMesh mesh = ingest::loadMesh(flags->input);

@@ -1,25 +1,19 @@
 #include "fidelity_report.h"
+#include "json_number.h"
 
-#include <cmath>
 #include <cstdio>
 
 namespace vtex::cli {
-namespace {
-
-// JSON has no NaN or infinity.
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-
-}  // namespace
 
 nlohmann::json fidelityJson(const render::SourceFidelity& m, std::uint32_t l) {
     if (m.chords.empty()) return nullptr;
     const auto& c = m.chords[l];
     const auto& b = m.beams[l];
-    return {{"visibility", number(c.visibility)},
-            {"transmittance", number(c.transmittance)},
-            {"error", number(c.error())},
-            {"beams", {{"mean", number(b.mean)}, {"mean_abs", number(b.meanAbs)}, {"p95_abs", number(b.p95Abs)},
-                       {"noise", number(b.noise)}}}};
+    return {{"visibility", jsonNumber(c.visibility)},
+            {"transmittance", jsonNumber(c.transmittance)},
+            {"error", jsonNumber(c.error())},
+            {"beams", {{"mean", jsonNumber(b.mean)}, {"mean_abs", jsonNumber(b.meanAbs)}, {"p95_abs", jsonNumber(b.p95Abs)},
+                       {"noise", jsonNumber(b.noise)}}}};
 }
 
 void printFidelity(const render::SourceFidelity& m, const std::filesystem::path& source, std::ostream& out) {

@@ -14,7 +14,7 @@ void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::st
     app.add_option("--width", args.width, "Image width (default: the scene's camera.width)")->check(CLI::Range(1, 16384));
     app.add_option("--height", args.height, "Image height (default: the scene's camera.height)")->check(CLI::Range(1, 16384));
     app.add_option("--stats", args.stats, "Write statistics (times, rays, …) as JSON");
-    app.add_option("--threads", args.threads, "Worker threads (0: all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
+    addThreadsOption(app, args.threads);
     app.add_flag("--aov", args.aovs, aovHelp);
     addMaxMemoryOption(app, args.maxMemory, "the image and what the scene loads");
     app.footer("Exit status: 0 success, 2 bad usage, 3 bad input (file and key named), 1 other failure.");

@@ -6,8 +6,8 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
-#include <random>
 #include <cstring>
+#include <random>
 #include <string>
 
 #include <fcntl.h>
@@ -86,9 +86,9 @@ AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::
     // std::filesystem's own "filesystem error: status: …" (found by fuzz_cli.py); such a path
     // fails below, when its temporary cannot be created, with vtex's message.
     std::error_code error;
-    const bool isDirectory = std::filesystem::is_directory(mTarget, error);
-    if (!isDirectory) checkOutputPath(mTarget);
-    if (isDirectory) throw IoError(mTarget, "is a directory, expected a file name");
+    if (std::filesystem::is_directory(mTarget, error))
+        throw IoError(mTarget, "is a directory, expected a file name");
+    checkOutputPath(mTarget);
     std::filesystem::path directory = mTarget.parent_path();
     if (directory.empty()) directory = ".";
     if (!std::filesystem::is_directory(directory, error))
@@ -97,17 +97,17 @@ AtomicOutputFile::AtomicOutputFile(std::filesystem::path target) : mTarget(std::
     // Hidden, and named after the target, so a stray temporary is easy to attribute. Not
     // mkstemp: its files are mode 0600, and an output should get the user's umask like any
     // other file, so the temporary is created 0666 & ~umask with O_EXCL and a unique suffix.
+    // And after its writer (host and pid, FolderLock::holderName): on a shared folder the
+    // temporaries of a live writer elsewhere are told from a dead one's.
+    static const std::string writer = [] {
+        std::string name = FolderLock::holderName();
+        for (char& c : name)
+            if (c == ':' || c == '/') c = '.';
+        return name;
+    }();
     static std::atomic<unsigned> counter{0};
     std::random_device entropy;
     for (int attempt = 0; attempt < 100; ++attempt) {
-        // Named after its writer (host and pid, FolderLock::holderName): on a shared folder the
-        // temporaries of a live writer elsewhere are told from a dead one's.
-        static const std::string writer = [] {
-            std::string name = FolderLock::holderName();
-            for (char& c : name)
-                if (c == ':' || c == '/') c = '.';
-            return name;
-        }();
         char suffix[32];
         std::snprintf(suffix, sizeof suffix, ".%u.%08x", counter.fetch_add(1), unsigned(entropy()));
         std::string name = ".";

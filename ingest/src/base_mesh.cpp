@@ -1,7 +1,8 @@
 // loadBaseMesh(): the renderer's quad mesh. Reads through the same bounded readers as
 // loadMesh() (OpenMesh PolyMesh for OFF/PLY/STL, vtex's OBJ parser, tinygltf for glTF), then
-// rebuilds each source polygon from its fan: a quad stays a quad, a triangle becomes a
-// collapsed quad, a larger polygon is cut into quads (and a last triangle) from its first corner.
+// rebuilds each source polygon from its fan: a quad stays a quad, two triangles that were one
+// quad (a triangulated export) become that quad again, any other triangle a collapsed quad, and a
+// larger polygon is cut into quads (and a last triangle) from its first corner.
 #include "detail.h"
 
 #include <vtex/core/input_file.h>
@@ -16,6 +17,93 @@
 #include <map>
 
 namespace vtex::ingest {
+namespace {
+
+using Polygon = std::vector<std::uint32_t>;
+
+// Two triangles that were one quad an exporter triangulated along its diagonal become that quad
+// again, if their normals are within kMaxFold of each other and their union is convex
+// (Blender's "Tris to Quads" takes the same 40° by default; a bilinear patch's two halves fold by
+// less on any mesh a texel would cover). First the pairs an exporter writes one after the other
+// as a fan, (v0, v1, v2) then (v0, v2, v3): the quad (v0, v1, v2, v3), in its own orientation, so
+// that texels keep their direction from cell to cell. Then any two triangles sharing an edge that
+// is the longest of both, wound consistently: the quad starting at its lowest vertex index. Other
+// triangles stay triangles.
+void mergeTrianglePairs(std::vector<Polygon>& polygons, const std::vector<Eigen::Vector3f>& positions) {
+    constexpr double kMaxFold = 40.0 * 3.14159265358979323846 / 180.0;
+    const auto at = [&](std::uint32_t v) { return positions[v].cast<double>(); };
+    // quad = (a, d, b, c) of triangles a→b→c and b→a→d: planar enough and convex.
+    const auto mergeable = [&](const Polygon& quad) {
+        const std::uint32_t a = quad[0], d = quad[1], b = quad[2], c = quad[3];
+        const Eigen::Vector3d n1 = (at(b) - at(a)).cross(at(c) - at(a)), n2 = (at(a) - at(b)).cross(at(d) - at(b));
+        if (!(n1.norm() > 0) || !(n2.norm() > 0)) return false;
+        if (std::acos(std::clamp(n1.normalized().dot(n2.normalized()), -1.0, 1.0)) > kMaxFold) return false;
+        for (int k = 0; k < 4; ++k) {
+            const Eigen::Vector3d p = at(quad[std::size_t(k)]), q = at(quad[std::size_t((k + 1) % 4)]),
+                                  r = at(quad[std::size_t((k + 2) % 4)]);
+            if (!((q - p).cross(r - q).dot(n1 + n2) > 0)) return false;
+        }
+        return true;
+    };
+    std::vector<Polygon> fans;
+    for (std::size_t i = 0; i < polygons.size(); ++i) {
+        const Polygon& t = polygons[i];
+        if (i + 1 < polygons.size() && t.size() == 3 && polygons[i + 1].size() == 3) {
+            const Polygon& u = polygons[i + 1];
+            // t = v0→v1→v2, u = v0→v2→v3: the shared diagonal v0–v2; as (a, d, b, c): a = v2, b = v0.
+            if (u[0] == t[0] && u[1] == t[2] && u[2] != t[1] && mergeable({t[2], u[2], t[0], t[1]})) {
+                fans.push_back({t[0], t[1], t[2], u[2]});
+                ++i;
+                continue;
+            }
+        }
+        fans.push_back(t);
+    }
+    polygons = std::move(fans);
+    // Each triangle's longest edge, as (from, to) in its winding.
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> longest;
+    const auto longestEdge = [&](const Polygon& t) {
+        int best = 0;
+        double length = -1;
+        for (int k = 0; k < 3; ++k) {
+            const double l = (at(t[std::size_t((k + 1) % 3)]) - at(t[std::size_t(k)])).squaredNorm();
+            if (l > length) { length = l; best = k; }
+        }
+        return std::pair(t[std::size_t(best)], t[std::size_t((best + 1) % 3)]);
+    };
+    for (std::size_t i = 0; i < polygons.size(); ++i)
+        if (polygons[i].size() == 3) longest.emplace(longestEdge(polygons[i]), i);
+    std::vector<char> merged(polygons.size(), 0);
+    std::vector<Polygon> out;
+    for (std::size_t i = 0; i < polygons.size(); ++i) {
+        if (merged[i]) continue;
+        const Polygon& t = polygons[i];
+        if (t.size() != 3) { out.push_back(t); continue; }
+        const auto [a, b] = longestEdge(t);
+        const auto partner = longest.find({b, a});
+        if (partner != longest.end() && partner->second != i && !merged[partner->second]) {
+            const Polygon& u = polygons[partner->second];
+            const auto apex = [](const Polygon& p, std::uint32_t x, std::uint32_t y) {
+                for (auto v : p) if (v != x && v != y) return v;
+                return x;
+            };
+            const std::uint32_t c = apex(t, a, b), d = apex(u, a, b);
+            const Polygon quad{a, d, b, c};  // t = a→b→c and u = b→a→d, both counter-clockwise
+            if (mergeable(quad)) {
+                const auto first = std::min_element(quad.begin(), quad.end()) - quad.begin();
+                Polygon rotated(4);
+                for (int k = 0; k < 4; ++k) rotated[std::size_t(k)] = quad[std::size_t((first + k) % 4)];
+                out.push_back(rotated);
+                merged[i] = merged[partner->second] = 1;
+                continue;
+            }
+        }
+        out.push_back(t);
+    }
+    polygons = std::move(out);
+}
+
+}  // namespace
 
 QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& options) {
     std::string extension = file.extension().string();
@@ -32,6 +120,7 @@ QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& op
         raw = detail::readOffPlyStl(bytes, extension.substr(1), file, options);
     else
         throw InputError(file, "unknown mesh format '" + extension + "'");
+    detail::turnToZUp(raw, options);
 
     for (const auto& t : raw.triangles)
         for (auto v : t)
@@ -40,13 +129,18 @@ QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& op
 
     // Polygons back from their fans.
     if (raw.polygonTriangles.empty()) raw.polygonTriangles.assign(raw.triangles.size(), 1);
-    QuadMesh mesh;
+    std::vector<Polygon> polygons;
     std::size_t t = 0;
     for (std::uint32_t count : raw.polygonTriangles) {
         if (t + count > raw.triangles.size()) throw InputError(file, "internal: polygon table mismatch");
-        std::vector<std::uint32_t> polygon{raw.triangles[t][0], raw.triangles[t][1], raw.triangles[t][2]};
+        Polygon polygon{raw.triangles[t][0], raw.triangles[t][1], raw.triangles[t][2]};
         for (std::uint32_t k = 1; k < count; ++k) polygon.push_back(raw.triangles[t + k][2]);
         t += count;
+        polygons.push_back(std::move(polygon));
+    }
+    mergeTrianglePairs(polygons, raw.positions);
+    QuadMesh mesh;
+    for (const Polygon& polygon : polygons) {
         std::size_t i = 1;
         for (; i + 2 < polygon.size(); i += 2) mesh.quads.push_back({polygon[0], polygon[i], polygon[i + 1], polygon[i + 2]});
         if (i + 1 < polygon.size()) mesh.quads.push_back({polygon[0], polygon[i], polygon[i + 1], polygon[i + 1]});

@@ -38,6 +38,7 @@ struct RawMesh {
     std::vector<std::string> warnings;
     RepairCounts repairs;  ///< the counts a reader already knows (invalidIndexFaces)
     std::string format;
+    char up = 'z';  ///< the file's own up axis (IngestOptions::up)
 };
 
 /// A decimal number of a text format (OBJ, OFF, ASCII PLY): what std::from_chars reads, a
@@ -69,6 +70,9 @@ bool isContainedRegularFile(const std::filesystem::path& root, const std::filesy
 
 RawMesh readGltf(std::string_view bytes, bool binary, const std::filesystem::path& file,
                  const std::filesystem::path& directory, const IngestOptions& options);
+
+/// Turns `raw` from its up axis (options.up, else raw.up) to +Z; returns the axis used.
+char turnToZUp(RawMesh& raw, const IngestOptions& options);
 
 /// Checks the JSON types of the glTF properties vtex relies on and the required extensions
 /// (tinygltf silently skips a property of the wrong type). Throws InputError.

@@ -760,6 +760,8 @@ RawMesh readGltf(std::string_view bytes, bool binary, const fs::path& file, cons
 
     RawMesh out;
     out.format = binary ? "glb" : "gltf";
+    // glTF is +Y up by its specification; the canonical mesh vtex writes is already +Z up.
+    out.up = model.asset.generator.rfind("vtex", 0) == 0 ? 'z' : 'y';
     for (std::size_t start = 0; start < warn.size();) {
         const std::size_t end = warn.find('\n', start);
         std::string line = warn.substr(start, end == std::string::npos ? std::string::npos : end - start);

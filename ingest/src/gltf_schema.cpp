@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 
@@ -36,20 +37,49 @@ bool isBase64Payload(std::string_view uri) {
     return true;
 }
 
-// A URI that is absolute, names a scheme or climbs out of the folder is refused before
-// tinygltf resolves anything (its file-system callbacks refuse such reads too, and symbolic
-// links leading out of the folder; this gives the clearer message). Data URIs must be base64.
+// The file name tinygltf opens for a URI: it percent-decodes it as its bundled dlib::urldecode
+// does ('+' is a space; "%XY" the byte of two hex digits, a non-hex digit counting as 0; a '%'
+// among the last two characters stays), so the check below looks at exactly that name.
+std::string decodeUriAsTinygltf(const std::string& uri) {
+    const auto hex = [](char c) -> unsigned {
+        if (c >= '0' && c <= '9') return unsigned(c - '0');
+        if (c >= 'a' && c <= 'f') return unsigned(c - 'a' + 10);
+        if (c >= 'A' && c <= 'F') return unsigned(c - 'A' + 10);
+        return 0;
+    };
+    std::string out;
+    for (std::size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '+') {
+            out += ' ';
+        } else if (uri[i] == '%' && uri.size() > i + 2) {
+            out += char((hex(uri[i + 1]) << 4) | hex(uri[i + 2]));
+            i += 2;
+        } else {
+            out += uri[i];
+        }
+    }
+    return out;
+}
+
+// A URI that is absolute, names a scheme or climbs out of the folder, as written or once
+// percent-decoded (`my%20buffer.bin` is the file `my buffer.bin`; `..%2F` climbs as `../` does),
+// is refused before tinygltf resolves anything (its file-system callbacks refuse such reads too,
+// and symbolic links leading out of the folder; this gives the clearer message). Data URIs must
+// be base64.
 void checkUri(const std::string& uri, const std::string& where, const fs::path& file) {
     if (uri.empty()) return;
     if (uri.rfind("data:", 0) == 0) {
         if (!isBase64Payload(uri)) throw InputError(file, "data URI is not valid base64", where);
         return;
     }
-    const fs::path path(uri);
-    bool escapes = path.is_absolute() || uri.find(':') != std::string::npos || uri[0] == '\\' ||
-                   uri.find('%') != std::string::npos;  // tinygltf URL-decodes: %2e%2e is ..
-    for (const auto& part : path)
-        if (part == "..") escapes = true;
+    bool escapes = false;
+    for (std::string name : {uri, decodeUriAsTinygltf(uri)}) {
+        escapes = escapes || name.empty() || name.find('\0') != std::string::npos || name.find(':') != std::string::npos ||
+                  name[0] == '\\' || name[0] == '/';
+        std::replace(name.begin(), name.end(), '\\', '/');
+        for (const auto& part : fs::path(name))
+            if (part == "..") escapes = true;
+    }
     if (escapes) throw InputError(file, "URI '" + uri.substr(0, 200) + "' escapes the input's folder (refused)", where);
 }
 

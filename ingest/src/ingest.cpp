@@ -28,9 +28,43 @@ bool isContainedRegularFile(const fs::path& root, const fs::path& candidate) {
     return c != resolved.end();
 }
 
+char turnToZUp(RawMesh& raw, const IngestOptions& options) {
+    const char up = options.up ? options.up : raw.up;
+    // Rotations taking the axis to +Z (determinant 1, so windings and normals stay outward).
+    const auto turn = [up](const Eigen::Vector3f& p) -> Eigen::Vector3f {
+        if (up == 'y') return {p.x(), -p.z(), p.y()};
+        if (up == 'x') return {-p.z(), p.y(), p.x()};
+        return p;
+    };
+    if (up != 'z') {
+        for (auto& p : raw.positions) p = turn(p);
+        for (auto& n : raw.normals) n = turn(n);
+    }
+    return up;
+}
+
 }  // namespace detail
 
 namespace {
+
+// IngestOptions::fitCell: uniformly into the unit cube, centred in x and y, base at z = 0.
+void fitToCell(TriangleMesh& mesh, IngestReport& r) {
+    if (mesh.positions.empty()) return;
+    Eigen::Vector3d lo = mesh.positions[0].cast<double>(), hi = lo;
+    for (const auto& p : mesh.positions) {
+        lo = lo.cwiseMin(p.cast<double>());
+        hi = hi.cwiseMax(p.cast<double>());
+    }
+    const double extent = (hi - lo).maxCoeff();
+    const double scale = extent > 0 ? 1 / extent : 1;
+    const Eigen::Vector3d offset(0.5 - scale * 0.5 * (lo.x() + hi.x()), 0.5 - scale * 0.5 * (lo.y() + hi.y()), -scale * lo.z());
+    for (auto& p : mesh.positions) p = (scale * p.cast<double>() + offset).cast<float>().cwiseMax(0.0f).cwiseMin(1.0f);
+    r.fitCell = true;
+    r.fitScale = scale;
+    r.fitOffset = offset;
+    r.boundsMin = (scale * lo + offset).cast<float>();
+    r.boundsMax = (scale * hi + offset).cast<float>().cwiseMin(1.0f);
+}
 
 std::string lowerExtension(const std::filesystem::path& file) {
     std::string extension = file.extension().string();
@@ -76,8 +110,10 @@ TriangleMesh loadMesh(const std::filesystem::path& file, const IngestOptions& op
                                    "' (expected .gltf, .glb, .obj, .off, .ply or .stl)");
     }
     r.format = raw.format;
+    r.up = detail::turnToZUp(raw, options);
     phase(options, "repairing");
     TriangleMesh mesh = detail::repairMesh(std::move(raw), file, options, r);
+    if (options.fitCell) fitToCell(mesh, r);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return mesh;
 }
@@ -96,6 +132,9 @@ std::string toJson(const IngestReport& r) {
     j["bounds"] = {{"min", {r.boundsMin.x(), r.boundsMin.y(), r.boundsMin.z()}},
                    {"max", {r.boundsMax.x(), r.boundsMax.y(), r.boundsMax.z()}}};
     j["closed"] = r.closed;
+    j["up"] = std::string(1, r.up);
+    j["fit"] = r.fitCell ? json{{"mode", "cell"}, {"scale", r.fitScale}, {"offset", {r.fitOffset.x(), r.fitOffset.y(), r.fitOffset.z()}}}
+                         : json{{"mode", "keep"}};
     const RepairCounts& c = r.repairs;
     j["repairs"] = {{"invalid_index_faces", c.invalidIndexFaces},
                     {"non_finite_faces", c.nonFiniteFaces},

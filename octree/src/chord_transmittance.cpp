@@ -15,6 +15,8 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 namespace vtex::octree {
 namespace {
@@ -175,7 +177,109 @@ double percentile95(std::vector<double> values) {
     return values[k];
 }
 
+// A shell chord (see ShellChordFit) cut where it crosses the tiling's x and y planes into
+// segments of the unit cube, each shifted back into it.
+std::vector<std::pair<Vec3, Vec3>> randomShellChord(ChordRng& rng) {
+    constexpr double kMinCos = 0.17364817766693033;  // cos 80°
+    // Cosine-weighted: cos² uniform, here over [cos² 80°, 1].
+    const double mu = std::sqrt(kMinCos * kMinCos + (1 - kMinCos * kMinCos) * rng.next());
+    const double phi = 2 * std::numbers::pi * rng.next();
+    const double sinTheta = std::sqrt(std::max(0.0, 1 - mu * mu));
+    const Vec3 a(rng.next(), rng.next(), 1.0);
+    const Vec3 delta = Vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), -mu) / mu;  // to z = 0
+    std::vector<double> cuts{0.0, 1.0};
+    for (int k = 0; k < 2; ++k) {
+        if (!(std::abs(delta[k]) > 0)) continue;
+        const double lo = std::min(a[k], a[k] + delta[k]), hi = std::max(a[k], a[k] + delta[k]);
+        for (double plane = std::floor(lo) + 1; plane < hi; plane += 1) cuts.push_back((plane - a[k]) / delta[k]);
+    }
+    std::sort(cuts.begin(), cuts.end());
+    std::vector<std::pair<Vec3, Vec3>> segments;
+    for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+        if (!(cuts[i + 1] > cuts[i])) continue;
+        const Vec3 middle = a + 0.5 * (cuts[i] + cuts[i + 1]) * delta;
+        const Vec3 shift(std::floor(middle.x()), std::floor(middle.y()), 0.0);
+        const auto inCube = [&](double t) { return (a + t * delta - shift).cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones()).eval(); };
+        segments.emplace_back(inCube(cuts[i]), inCube(cuts[i + 1]));
+    }
+    return segments;
+}
+
+// The chords of fitShellChords: whether each misses the source, and its optical depth ∫ρÂ at
+// every level.
+struct ShellChords {
+    std::vector<char> misses;
+    std::vector<std::vector<double>> depth;  ///< [level][chord]
+};
+ShellChords traceShellChords(const Octree& tree, const ChordVisibility& visible, int chords, std::uint64_t seed,
+                             std::size_t firstLevel, std::size_t endLevel) {
+    const std::size_t count = std::size_t(std::max(chords, 0));
+    ShellChords out;
+    out.misses.assign(count, 0);
+    out.depth.assign(endLevel - firstLevel, std::vector<double>(count, 0.0));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t j = r.begin(); j != r.end(); ++j) {
+            ChordRng rng{mix64(seed ^ mix64(0x5E11ull + std::uint64_t(j)))};
+            const auto segments = randomShellChord(rng);
+            bool misses = true;
+            for (const auto& [a, b] : segments) misses = misses && visible(a, b);
+            out.misses[j] = misses ? 1 : 0;
+            for (std::size_t level = firstLevel; level < endLevel; ++level)
+                for (const auto& [a, b] : segments) out.depth[level - firstLevel][j] += chordDepth(tree, std::uint32_t(level), a, b);
+        }
+    });
+    return out;
+}
+
+double meanTransmittance(const std::vector<double>& depth, double tauScale) {
+    double sum = 0;  // in chord order: the same whatever the schedule
+    for (double d : depth) sum += std::exp(-tauScale * d);
+    return depth.empty() ? 0 : sum / double(depth.size());
+}
+
+double meanMisses(const std::vector<char>& misses) {
+    double sum = 0;
+    for (char m : misses) sum += m;
+    return misses.empty() ? 0 : sum / double(misses.size());
+}
+
 }  // namespace
+
+std::vector<ShellChordFit> fitShellChords(const Octree& tree, const ChordVisibility& visible, double tau, int chords,
+                                          std::uint64_t seed, std::uint32_t finestLevel) {
+    std::vector<ShellChordFit> out(std::min(tree.levels.size(), std::size_t(finestLevel) + 1));
+    if (chords <= 0 || out.empty()) return out;
+    const ShellChords traced = traceShellChords(tree, visible, chords, seed, 0, out.size());
+    const double visibility = meanMisses(traced.misses);
+    for (std::size_t level = 0; level < out.size(); ++level) {
+        const std::vector<double>& depth = traced.depth[level];
+        ShellChordFit& fit = out[level];
+        fit.visibility = visibility;
+        fit.transmittance = meanTransmittance(depth, tau);
+        if (std::all_of(depth.begin(), depth.end(), [](double d) { return !(d > 0); })) continue;
+        // The mean transmittance falls strictly with the scale: bisection in log scale.
+        double lo = std::log(1.0 / 64), hi = std::log(64.0);
+        if (meanTransmittance(depth, tau * std::exp(hi)) >= visibility) lo = hi;
+        else if (meanTransmittance(depth, tau * std::exp(lo)) <= visibility) hi = lo;
+        for (int i = 0; i < 64 && hi - lo > 1e-12; ++i) {
+            const double mid = 0.5 * (lo + hi);
+            (meanTransmittance(depth, tau * std::exp(mid)) > visibility ? lo : hi) = mid;
+        }
+        fit.scale = std::exp(0.5 * (lo + hi));
+    }
+    return out;
+}
+
+ShellChordFit measureShellChords(const Octree& tree, const ChordVisibility& visible, std::uint32_t level, double scale,
+                                 double tau, int chords, std::uint64_t seed) {
+    ShellChordFit out;
+    if (chords <= 0 || level >= tree.levels.size()) return out;
+    const ShellChords traced = traceShellChords(tree, visible, chords, seed, level, level + 1);
+    out.visibility = meanMisses(traced.misses);
+    out.transmittance = meanTransmittance(traced.depth[0], tau * scale);
+    out.scale = scale;
+    return out;
+}
 
 std::vector<BeamError> measureBeamTransmittance(const Octree& tree, const ChordVisibility& visible, double tau,
                                                 int beams, int chordsPerBeam, std::uint64_t seed) {

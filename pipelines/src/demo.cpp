@@ -61,15 +61,19 @@ std::string vector(const Point& p) {
     return text;
 }
 
-// One surface covered with one texel, under a low sun.
+// One surface covered with one texel, under a low sun. The pipeline binds the texel to the one it
+// builds; the scene names that build's files (DIR/builds, DIR/sources, relative to DIR/inputs)
+// as well, so that after the demo `vtex render DIR/inputs/SCENE.toml` renders it on its own.
 void writeScene(const fs::path& file, const std::string& title, const Shot& shot, int width, int height,
-                const std::string& mesh, double shellHeight, std::array<double, 2> repeat, const Point& ground) {
+                const std::string& mesh, double shellHeight, std::array<double, 2> repeat, const Point& ground,
+                const std::string& texel) {
     std::ostringstream toml;
     toml << "# vtex demo: " << title << "\n"
          << "[camera]\nposition = " << vector(shot.eye) << "\nlook_at = " << vector(shot.target)
          << "\nup = [0.0, 0.0, 1.0]\nfov_y = " << shot.fov << "\nwidth = " << width << "\nheight = " << height
          << "\n\n[[light]]\ntype = \"directional\"\ndirection = [-0.6, 0.5, -0.8]\ncolor = [2.8, 2.7, 2.5]\n\n"
-         << "[[texel]]\nname = \"cover\"\nvolume = \"bound-by-the-pipeline.vto\"\ntau = 1.0\n"
+         << "[[texel]]\nname = \"cover\"\nvolume = \"../builds/" << texel << ".vto\"\nsource = \"../sources/" << texel
+         << ".glb\"\ntau = 1.0\n"
          << "material = { diffuse = [1.0, 1.0, 1.0], specular = [0.04, 0.04, 0.04], shininess = 20.0, "
             "ambient = [0.04, 0.045, 0.05] }\n\n"
          << "[[surface]]\nmesh = \"" << mesh << "\"\ntexel = \"cover\"\nheight = " << shellHeight
@@ -114,22 +118,22 @@ RunReport runDemo(const DemoOptions& options) {
 
     // Scenes, one per figure.
     writeScene(inputs / "fig7-grass-hill.toml", "Fig. 7, grass on a hill of 1404 faces", {{0, -19, 4.2}, {0, 0, 1.4}, 40},
-               width, height, "hill-1404.obj", 0.3, {2, 2}, soil);
+               width, height, "hill-1404.obj", 0.3, {2, 2}, soil, "grass");
     writeScene(inputs / "fig6-bush-field.toml", "Fig. 6, bushes tiling a 50x500 region to the horizon",
-               {{5, -1.5, 0.9}, {5, 30, 0}, 50}, width, height, "field-50x500.obj", 0.2, {5, 5}, soil);
+               {{5, -1.5, 0.9}, {5, 30, 0}, 50}, width, height, "field-50x500.obj", 0.2, {5, 5}, soil, "bush");
     writeScene(inputs / "fig10-fur-torus.toml", "Fig. 10, fur on a torus of 240 faces", {{0, -6.2, 4.2}, {0, 0, 0}, 40},
-               width, height, "torus-240.obj", 0.15, {2, 1}, grey);
+               width, height, "torus-240.obj", 0.15, {2, 1}, grey, "fur");
     writeScene(inputs / "fig9-forest-hill.toml", "Fig. 9, a forest on a hill of 578 faces",
-               {{0, -25, 10}, {0, 0, 0.8}, 40}, width, height, "hill-578.obj", 0.7, {1, 1}, soil);
+               {{0, -25, 10}, {0, 0, 0.8}, 40}, width, height, "hill-578.obj", 0.7, {1, 1}, soil, "bush");
     writeScene(inputs / "fig11-blocks.toml", "Fig. 11, building elements on 81 faces", {{0, -9.5, 6.5}, {0, 0, 0}, 40},
-               width, height, "plane-81.obj", 1.0, {1, 1}, grey);
+               width, height, "plane-81.obj", 1.0, {1, 1}, grey, "blocks");
     writeScene(inputs / "fig1-brushed.toml", "Fig. 1, one texel of brushed aluminium", {{0, -2.6, 2.8}, {0, 0, 0.4}, 40},
-               height, height, "quad.obj", 1.0, {1, 1}, grey);
+               height, height, "quad.obj", 1.0, {1, 1}, grey, "brushed");
     writeScene(inputs / "study-forest.toml", "the forest of Fig. 9 at half size, for the error-against-time study",
                {{0, -25, 10}, {0, 0, 0.8}, 40}, std::max(16, width / 2), std::max(12, height / 2), "hill-578.obj", 0.7,
-               {1, 1}, soil);
+               {1, 1}, soil, "bush");
     writeScene(inputs / "fig4-bush.toml", "Fig. 4, one texel at successive octree levels", {{0, -3.2, 2.6}, {0, 0, 0.8}, 40},
-               height, height, "quad.obj", 2.0, {1, 1}, soil);
+               height, height, "quad.obj", 2.0, {1, 1}, soil, "bush");
 
     // The pipeline.
     std::ostringstream p;

@@ -149,7 +149,7 @@ Pipeline loadPipeline(const fs::path& file) {
     for (std::size_t i = 0; i < renders.size(); ++i) {
         const toml::table& t = *renders[i];
         const std::string path = indexed("render", i);
-        reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading", "hybrid", "approximations", "renderer", "mode"});
+        reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading", "hybrid", "level_fit", "approximations", "renderer", "mode"});
         RenderStep s;
         s.name = reader.string(t, path, "name", {});
         checkName(reader, TomlReader::join(path, "name"), s.name, renderNames);
@@ -179,6 +179,7 @@ Pipeline loadPipeline(const fs::path& file) {
         s.lodBias = reader.number(t, path, "lod_bias", 0.0, -16.0, 16.0);
         s.shading = reader.choice(t, path, "shading", std::string("fast"), {"fast", "reference"});
         s.hybrid = reader.boolean(t, path, "hybrid", true);
+        s.levelFit = reader.boolean(t, path, "level_fit", true);
         s.approximations = reader.choice(t, path, "approximations", std::string("default"), {"default", "exact"});
         s.renderer = reader.choice(t, path, "renderer", std::string("texel"), {"texel", "reference"});
         s.mode = reader.choice(t, path, "mode", std::string("embedded"), {"embedded", "deformed"});

@@ -115,6 +115,7 @@ render::RenderOptions renderOptions(const RenderStep& step) {
     o.spp = step.spp;
     o.lodBias = step.lodBias;
     o.hybrid = step.hybrid;
+    o.fitLevels = step.levelFit;
     if (step.approximations == "exact") o.approximations = render::ApproximationBudget::exact();
     o.shading = step.shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
     return o;
@@ -364,7 +365,8 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             std::ostringstream d;
             d << header << "render " << step.renderer << " " << step.mode << "\nsize " << step.width << "x" << step.height
               << " spp " << step.spp << " lod_bias " << step.lodBias << " shading " << step.shading
-              << " hybrid " << step.hybrid << "\napproximations " << renderOptions(step).approximations.key() << "\nscene "
+              << " hybrid " << step.hybrid << " level_fit " << step.levelFit << "\napproximations "
+              << renderOptions(step).approximations.key() << "\nscene "
               << hashFile(step.scene) << "\n";
             const render::Scene scene = boundScene();
             for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";

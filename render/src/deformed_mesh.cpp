@@ -16,7 +16,6 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
 namespace vtex::render::detail {

@@ -179,7 +179,7 @@ std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& option
     // The factors are stated and measured in renderer.h (estimateRenderMemory).
     const int w = options.width > 0 ? options.width : scene.camera.width;
     const int h = options.height > 0 ? options.height : scene.camera.height;
-    double bytes = double(std::max(w, 0)) * double(std::max(h, 0)) * (options.aovs ? 28.0 : 20.0) + double(16 << 20);
+    double bytes = double(std::max(w, 0)) * double(std::max(h, 0)) * (options.aovs ? 30.0 : 22.0) + double(16 << 20);
     std::vector<bool> used(scene.texels.size(), false);
     for (const SurfaceDef& s : scene.surfaces) {
         if (!s.meshData) bytes += 32 * fileBytes(s.mesh);

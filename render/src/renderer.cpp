@@ -337,8 +337,11 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
 
     const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - renderStart).count();
     result.stats = detail::summarize(tileCounters, geometry, threads, width, height, strata * strata, wallSeconds, loadSeconds);
-    for (const TexelRuntime& t : texels)
-        if (t.volume) result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
+    for (const TexelRuntime& t : texels) {
+        if (!t.volume) continue;
+        result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
+        result.stats.levelScales.push_back(t.levelScale);
+    }
     result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
     result.image = std::move(image);
     result.warnings = detail::renderWarnings(scene, tileCounters);
@@ -371,6 +374,7 @@ void writeStatsJson(const RenderStats& s, AtomicOutputFile& out) {
     if (s.renderer == "texel") {
         j["mesh_segments"] = s.meshSegments;
         j["mesh_levels"] = s.meshLevels;
+        j["level_scales"] = s.levelScales;
         j["approximations"] = s.approximations;
     }
     if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;

@@ -99,7 +99,7 @@ public:
         }
         const Vec3 p1 = p0 + step * lr;
         const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim.cell, r, surface)));
-        const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tau, p0, p1, level, kTransmittanceCutoff);
+        const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level, kTransmittanceCutoff);
         counters.voxels += near.blocks;
         if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
         const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
@@ -140,8 +140,8 @@ public:
                 const double meshWeight = texel.meshWeight(choice.requested);
                 double result = 0;
                 if (meshWeight < 1) {
-                    const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tau, p0, p1,
-                                                                        shadowLevel(texel, choice),
+                    const int level = shadowLevel(texel, choice);
+                    const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level,
                                                                         kTransmittanceCutoff / transmittance);
                     counters.voxels += seg.blocks;
                     result = (1 - meshWeight) * seg.transmittance;

@@ -95,10 +95,11 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
     const double shadowRefresh = std::clamp(mOptions.approximations.shadowRefresh, 1e-6, 1.0);
     const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
     double reusedShare = 0;
+    const double tau = texel.tauAt(level);
     counters.voxels += detail::march(*texel.volume, level, span.p0, span.dir, span.length,
         [&](const GridVoxel& voxel, double s, double ds) {
             const SggxMatrix& sMatrix = voxel.s;
-            const double sigma = texel.tau * double(voxel.density) * detail::normalizedArea(sMatrix, span.dir);
+            const double sigma = tau * double(voxel.density) * detail::normalizedArea(sMatrix, span.dir);
             // 1 − exp rather than expm1 (which takes 1.7× as long here): the opacity is only
             // added to and multiplied with quantities of order one, where its absolute error (an
             // ulp of 1) is what counts.

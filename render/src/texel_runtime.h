@@ -31,6 +31,14 @@ struct TexelRuntime {
     /// transmittance is within the hybrid's tolerance of the mesh's (0 without a source). A
     /// shadow needs no antialiasing, and coarser levels are measurably too opaque.
     int coarsestShadowLevel = 0;
+    /// Per level, the factor of τ fitted so that the level lets through, on chords crossing the
+    /// shell from its top to its floor, what the source mesh does (octree::fitShellChords;
+    /// RenderOptions::fitLevels); empty: τ at every level.
+    std::vector<double> levelScale;
+    /// The extinction scale τ of `level`, with its fitted factor.
+    double tauAt(int level) const {
+        return level >= 0 && std::size_t(level) < levelScale.size() ? tau * levelScale[std::size_t(level)] : tau;
+    }
     /// The mesh's share at continuous level `requested` (LevelChoice::requested).
     double meshWeight(double requested) const {
         return source ? std::clamp(requested - meshLevel, 0.0, 1.0) : 0.0;

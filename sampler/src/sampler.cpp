@@ -13,6 +13,7 @@
 #include "inside_test.h"
 
 #include <vtex/core/error.h>
+#include <vtex/core/memory_budget.h>
 #include <vtex/octree/filtering.h>
 #include <vtex/sampler/clip.h>
 #include <vtex/sampler/sampler.h>
@@ -25,6 +26,7 @@
 #include <bit>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace vtex::sampler {

@@ -115,3 +115,46 @@ TEST(Cli, FuzzANegativeOrOverflowingCountIsBadUsage) {
               std::string::npos)
         << r.err;
 }
+
+// `vtex ingest --up/--fit` (issue 16): a Z-up OBJ read as Y-up and fitted into the cell lands in
+// the unit cube with its old +Y up, and the report says how; an axis that is not one is bad usage.
+TEST(Cli, IngestTurnsAndFitsAsTheFlagsSay) {
+    const std::filesystem::path dir = std::filesystem::path(VTEX_TEST_TMP) / "cli_ingest_up";
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "tall.obj") << "v 0 0 0\nv 1 0 0\nv 0 4 0\nf 1 2 3\n";
+    const auto r = runVtex({"ingest", (dir / "tall.obj").string(), "-o", (dir / "tall.glb").string(), "--report",
+                            (dir / "tall.json").string(), "--up", "y", "--fit", "cell", "-q"});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    const std::string report = vtex::test::readText(dir / "tall.json");
+    EXPECT_NE(report.find("\"up\": \"y\""), std::string::npos) << report;
+    EXPECT_NE(report.find("\"mode\": \"cell\""), std::string::npos) << report;
+    EXPECT_NE(report.find("\"scale\": 0.25"), std::string::npos) << report;
+    const auto bad = runVtex({"ingest", (dir / "tall.obj").string(), "-o", (dir / "bad.glb").string(), "--up", "w"});
+    EXPECT_EQ(bad.exitStatus, 2) << bad.err;
+    EXPECT_NE(bad.err.find("--up"), std::string::npos) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.glb"));
+}
+
+// `--threads` has one meaning wherever threads are used (issue 17): the workers a command may
+// run at once. The result does not depend on it: a sample and a build with one thread and with
+// two are the same bytes. A negative count is bad usage.
+TEST(Cli, ThreadsLimitTheWorkersAndChangeNoByte) {
+    const std::filesystem::path dir = std::filesystem::path(VTEX_TEST_TMP) / "cli_threads";
+    std::filesystem::create_directories(dir);
+    const std::string mesh = (dir / "bush.glb").string();
+    ASSERT_EQ(runVtex({"pattern", "bush", "--leaves", "60", "-o", mesh, "-q"}).exitStatus, 0);
+    for (const std::string threads : {"1", "2"}) {
+        const std::string vtl = (dir / ("b" + threads + ".vtl")).string(), vto = (dir / ("b" + threads + ".vto")).string();
+        const auto s = runVtex({"sample", mesh, "-o", vtl, "-r", "32", "--threads", threads, "-q"});
+        ASSERT_EQ(s.exitStatus, 0) << s.err;
+        const auto b = runVtex({"build", vtl, "-o", vto, "--threads", threads, "-q"});
+        ASSERT_EQ(b.exitStatus, 0) << b.err;
+    }
+    EXPECT_EQ(vtex::test::readText(dir / "b1.vtl"), vtex::test::readText(dir / "b2.vtl"));
+    EXPECT_EQ(vtex::test::readText(dir / "b1.vto"), vtex::test::readText(dir / "b2.vto"));
+    for (const std::string command : {"sample", "build", "run", "demo"}) {
+        const auto r = runVtex({command, "x", "--threads", "-1"});
+        EXPECT_EQ(r.exitStatus, 2) << command << ": " << r.err;
+        EXPECT_NE(r.err.find("--threads"), std::string::npos) << command << ": " << r.err;
+    }
+}

@@ -94,6 +94,34 @@ TEST(Outputs, ACommandWritesAllItsOutputsOrNone) {
     EXPECT_FALSE(fs::exists(s.dir / "y.json"));
 }
 
+// `vtex build --source` loads the mesh before the build: a missing or unreadable source fails
+// with exit 3 naming it, before the volume is read or built (no "stored nodes" line) and with no
+// .vto left, quiet or not. It used to fail only after writing the .vto, and not at all with -q,
+// which never loaded the source.
+TEST(Outputs, ABadBuildSourceFailsBeforeAnyWorkAndLeavesNoOctree) {
+    const Specials s = makeSpecials("build_source");
+    const fs::path glb = s.dir / "bush.glb", vtl = s.dir / "bush.vtl", vto = s.dir / "bush.vto";
+    ASSERT_EQ(runVtex({"pattern", "bush", "-o", glb.string(), "--leaves", "50"}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"sample", glb.string(), "-o", vtl.string(), "-r", "16"}).exitStatus, 0);
+    const fs::path missing = s.dir / "missing.glb", garbage = s.dir / "garbage.glb";
+    std::ofstream(garbage) << "not a mesh";
+    for (const fs::path& bad : {missing, garbage})
+        for (const bool quiet : {false, true}) {
+            std::vector<std::string> args = {"build", vtl.string(), "-o", vto.string(), "--source", bad.string()};
+            if (quiet) args.insert(args.begin(), "-q");
+            const auto r = runVtex(args);
+            EXPECT_EQ(r.exitStatus, 3) << bad << (quiet ? " -q: " : ": ") << r.err;
+            EXPECT_NE(r.err.find(bad.string()), std::string::npos) << r.err;
+            EXPECT_EQ(r.err.find("stored nodes"), std::string::npos) << "built before the source was read: " << r.err;
+            EXPECT_FALSE(fs::exists(vto)) << bad << (quiet ? " -q" : "");
+        }
+    // The same build with the real source writes the octree.
+    const auto good = runVtex({"build", vtl.string(), "-o", vto.string(), "--source", glb.string()});
+    EXPECT_EQ(good.exitStatus, 0) << good.err;
+    EXPECT_NE(good.err.find("stored nodes"), std::string::npos) << good.err;
+    EXPECT_TRUE(fs::exists(vto));
+}
+
 // Two output flags naming one file (`-o a.exr --png a.exr`, written as "./a.exr" too) would
 // write both and keep the second: bad usage, refused before any work with both flags named.
 TEST(Outputs, TwoOutputFlagsNamingOneFileAreBadUsage) {

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -32,6 +34,14 @@ TriangleMesh loadText(const std::string& name, const std::string& bytes, IngestR
     const fs::path path = tmp(name);
     test::writeBytes(path, bytes);
     return loadMesh(path, options, report);
+}
+
+// The file's own frame: these tests check what the reader does with glTF's nodes and
+// primitives, before any turn of its +Y up to vtex's +Z (Ingest.GltfIsTurnedFromYUpToZUp).
+IngestOptions fileFrame() {
+    IngestOptions options;
+    options.up = 'z';
+    return options;
 }
 
 Eigen::Vector3f faceNormal(const TriangleMesh& m, std::size_t t) {
@@ -97,6 +107,56 @@ TEST(Ingest, GlbRoundTripIsExactAndCanonical) {
         }
 }
 
+// glTF is +Y up (its specification, §3.4; Blender's exporter writes it): a point (x, y, z) of the
+// file is (x, −z, y) in vtex's +Z-up frame, its normals alike; vtex's own .glb is already +Z up
+// and round-trips unchanged; --up overrides either, for any format.
+TEST(Ingest, GltfIsTurnedFromYUpToZUp) {
+    GltfBuilder b;
+    // A triangle standing in glTF's up direction: its apex at y = 2, its normal +z (toward the
+    // glTF viewer).
+    const int pos = b.positions(std::vector<float>{0, 0, 0, 1, 0, 0, 0, 2, 0});
+    const int nrm = b.accessor(b.view(std::vector<float>{0, 0, 1, 0, 0, 1, 0, 0, 1}), 5126, 3, "VEC3");
+    b.meshNode({{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}}}});
+    IngestReport report;
+    const TriangleMesh m = loadText("standing.gltf", b.gltfEmbedded(), &report);
+    EXPECT_EQ(report.up, 'y');
+    EXPECT_FLOAT_EQ(report.boundsMax.z(), 2.0f);  // the apex is up
+    EXPECT_FLOAT_EQ(report.boundsMax.y(), 0.0f);
+    for (const auto& n : m.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, -1, 0), 1e-6f)) << n.transpose();
+    EXPECT_NE(toJson(report).find("\"up\": \"y\""), std::string::npos);
+    // Written by vtex and read back: the same coordinates, not turned again.
+    const fs::path canonical = tmp("standing-canonical.glb");
+    writeMeshGlb(m, canonical);
+    IngestReport again;
+    EXPECT_EQ(loadMesh(canonical, {}, &again).positions, m.positions);
+    EXPECT_EQ(again.up, 'z');
+    // --up x: +X is turned to +Z, for an OBJ too.
+    IngestOptions xUp;
+    xUp.up = 'x';
+    IngestReport obj;
+    loadText("x-up.obj", "v 0 0 0\nv 3 0 0\nv 0 1 0\nf 1 2 3\n", &obj, xUp);
+    EXPECT_FLOAT_EQ(obj.boundsMax.z(), 3.0f);
+    EXPECT_FLOAT_EQ(obj.boundsMax.x(), 0.0f);
+}
+
+// --fit cell: the largest side of the bounding box becomes 1, centred in x and y, base at z = 0,
+// the same factor on every axis; recorded in the report.
+TEST(Ingest, FitCellScalesUniformlyIntoTheUnitCube) {
+    IngestOptions options;
+    options.fitCell = true;
+    IngestReport report;
+    const TriangleMesh m = loadText("fit.obj", "v 10 20 5\nv 14 20 5\nv 10 22 7\nf 1 2 3\n", &report, options);
+    EXPECT_DOUBLE_EQ(report.fitScale, 0.25);
+    EXPECT_FLOAT_EQ(report.boundsMin.x(), 0.0f);
+    EXPECT_FLOAT_EQ(report.boundsMax.x(), 1.0f);
+    EXPECT_FLOAT_EQ(report.boundsMin.y(), 0.25f);  // 2 of 4 wide, centred
+    EXPECT_FLOAT_EQ(report.boundsMax.y(), 0.75f);
+    EXPECT_FLOAT_EQ(report.boundsMin.z(), 0.0f);
+    EXPECT_FLOAT_EQ(report.boundsMax.z(), 0.5f);
+    for (const auto& p : m.positions) EXPECT_TRUE((p.array() >= 0).all() && (p.array() <= 1).all()) << p.transpose();
+    EXPECT_NE(toJson(report).find("\"cell\""), std::string::npos);
+}
+
 TEST(Ingest, NodeTransformsAreBakedWithNormalsByInverseTranspose) {
     GltfBuilder b;
     const int pos = b.positions(vtex::test::kTriangle);
@@ -107,7 +167,7 @@ TEST(Ingest, NodeTransformsAreBakedWithNormalsByInverseTranspose) {
     b.doc["nodes"] = {{{"translation", {10, 0, 0}}, {"children", {1}}},
                       {{"mesh", 0}, {"rotation", {s, 0, 0, s}}, {"scale", {1, 2, 1}}}};
     b.doc["scenes"] = {{{"nodes", {0}}}};
-    const TriangleMesh m = loadText("trs.gltf", b.gltfEmbedded());
+    const TriangleMesh m = loadText("trs.gltf", b.gltfEmbedded(), nullptr, fileFrame());
     ASSERT_EQ(m.triangles.size(), 1u);
     // (0,1,0) → scale (0,2,0) → rotate about x (0,0,2) → translate (10,0,2).
     bool seen = false;
@@ -123,7 +183,7 @@ TEST(Ingest, MatrixWithMirrorFlipsWinding) {
     const int pos = b.positions(vtex::test::kTriangle);
     b.meshNode({{"attributes", {{"POSITION", pos}}}},
                {{"matrix", {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}}});
-    const TriangleMesh m = loadText("mirror.gltf", b.gltfEmbedded());
+    const TriangleMesh m = loadText("mirror.gltf", b.gltfEmbedded(), nullptr, fileFrame());
     ASSERT_EQ(m.triangles.size(), 1u);
     // Mirrored in x, the triangle still faces +z because its winding was flipped.
     EXPECT_GT(faceNormal(m, 0).z(), 0.99f);
@@ -140,7 +200,7 @@ TEST(Ingest, StripsFansAndNonIndexed) {
         const int idx = b.indices(order);
         b.meshNode({{"attributes", {{"POSITION", pos}}}, {"indices", idx}, {"mode", mode}});
         IngestReport report;
-        const TriangleMesh m = loadText("mode" + std::to_string(mode) + ".glb", b.glb(), &report);
+        const TriangleMesh m = loadText("mode" + std::to_string(mode) + ".glb", b.glb(), &report, fileFrame());
         ASSERT_EQ(m.triangles.size(), 2u) << "mode " << mode;
         for (std::size_t t = 0; t < 2; ++t) EXPECT_GT(faceNormal(m, t).z(), 0.99f) << "mode " << mode;
     }
@@ -459,6 +519,61 @@ TEST(BaseMesh, QuadsStayQuadsTrianglesCollapse) {
     EXPECT_FALSE(off.isTriangle(1));
     EXPECT_TRUE(off.isTriangle(2));
     for (const auto& n : off.normals) EXPECT_TRUE(n.isApprox(Eigen::Vector3f(0, 0, 1))) << n.transpose();
+}
+
+// A quad grid exported triangulated (as Blender writes it with "Triangulate Faces") comes back
+// as its quads (issue 16): each pair of triangles on a quad's diagonal is one cell again, starting
+// at its lowest vertex, wound counter-clockwise; triangles that were not a quad stay triangles.
+TEST(BaseMesh, ATriangulatedGridComesBackAsItsQuads) {
+    constexpr int n = 4;
+    std::string obj;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) obj += "v " + std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(0.1 * i * j) + "\n";
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;  // OBJ counts from 1
+            // Alternate the diagonal, as exporters do not all cut the same way.
+            if ((i + j) % 2) obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\nf " +
+                                    std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
+            else obj += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(d) + "\nf " +
+                        std::to_string(b) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
+        }
+    obj += "v 10 0 0\nv 11 0 0\nv 10 1 0\nf 26 27 28\n";  // a lone triangle
+    test::writeBytes(tmp("triangulated.obj"), obj);
+    const QuadMesh q = loadBaseMesh(tmp("triangulated.obj"));
+    ASSERT_EQ(q.quads.size(), std::size_t(n * n + 1));
+    // Corners by their (x, y), each quad turned to start at its smallest: the reader numbers
+    // vertices in its own order, and a quad may start at any corner.
+    using Corners = std::array<std::pair<float, float>, 4>;
+    const auto canonical = [](Corners c) {
+        std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+        return c;
+    };
+    std::set<Corners> expected, quads;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            expected.insert(canonical({std::pair(float(i), float(j)), std::pair(float(i + 1), float(j)),
+                                       std::pair(float(i + 1), float(j + 1)), std::pair(float(i), float(j + 1))}));
+    int triangles = 0, fanCells = 0;
+    for (std::size_t f = 0; f < q.quads.size(); ++f) {
+        if (q.isTriangle(f)) {
+            ++triangles;
+            continue;
+        }
+        Corners c;
+        for (int k = 0; k < 4; ++k) c[std::size_t(k)] = {q.positions[q.quads[f][std::size_t(k)]].x(), q.positions[q.quads[f][std::size_t(k)]].y()};
+        quads.insert(canonical(c));
+        // A fan pair keeps the quad's own first corner, its lower left here; another pair starts
+        // at its lowest vertex index.
+        const auto& first = q.positions[q.quads[f][0]];
+        const bool lowerLeft = first.x() == std::min({c[0].first, c[1].first, c[2].first, c[3].first}) &&
+                               first.y() == std::min({c[0].second, c[1].second, c[2].second, c[3].second});
+        EXPECT_TRUE(lowerLeft || q.quads[f][0] == *std::min_element(q.quads[f].begin(), q.quads[f].end())) << f;
+        fanCells += lowerLeft;
+    }
+    EXPECT_EQ(quads, expected);
+    EXPECT_GE(fanCells, n * n / 2);  // the odd cells, written as fans, at least
+    EXPECT_EQ(triangles, 1);
 }
 
 }  // namespace

@@ -142,6 +142,23 @@ TEST(Malformed, UriEscapingTheFolderIsRefused) {
     EXPECT_EQ(ingest::loadMesh(inner / "inside.gltf").triangles.size(), 1u);
 }
 
+// URIs are percent-encoded (a space is %20, as exporters write it): they resolve to the file
+// with the decoded name, and an encoded traversal is refused as the plain one is (issue 16).
+TEST(Malformed, PercentEncodedUrisResolveInsideTheFolderOnly) {
+    GltfBuilder b;
+    const int pos = b.positions(test::kTriangle);
+    b.meshNode({{"attributes", {{"POSITION", pos}}}});
+    const fs::path inner = dir() / "percent";
+    fs::create_directories(inner);
+    test::writeBytes(inner / "my buffer.bin", b.bin);
+    b.finishBuffer("my%20buffer.bin");
+    test::writeBytes(inner / "spaced.gltf", b.doc.dump());
+    EXPECT_EQ(ingest::loadMesh(inner / "spaced.gltf").triangles.size(), 1u);
+    test::writeBytes(dir() / "outside.bin", b.bin);
+    b.finishBuffer("..%2Foutside.bin");
+    expectRefused("percent/encoded_dotdot.gltf", b.doc.dump(), "refused");
+}
+
 TEST(Malformed, BadBase64InDataUri) {
     GltfBuilder b;
     const int pos = b.positions(test::kTriangle);

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <iostream>
 #include <numbers>
@@ -106,4 +107,111 @@ TEST(BeamTransmittance, APoissonMediumOfDiscsIsExponentialCoarseAndTooTransparen
     // The p95 of the finest level's beams is well above its noise: the measure sees the error
     // that a mean over the texel would hide.
     EXPECT_GT(beams[6].p95Abs, 3 * beams[6].noise);
+}
+
+namespace {
+
+std::uint64_t splitmix(std::uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+
+std::shared_ptr<const vtex::octree::Octree> makeOctreeOf(int levels, float density) {
+    return vtex::render::test::makeOctree(levels, [density](int, int, int) { return std::optional(vtex::render::test::sphereVoxel(density)); });
+}
+
+// A uniform number in [0, 1) that is a function of the segment alone.
+double segmentHash(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    std::uint64_t h = 0;
+    for (int k = 0; k < 3; ++k) {
+        h = splitmix(h ^ std::bit_cast<std::uint64_t>(a[k]));
+        h = splitmix(h ^ std::bit_cast<std::uint64_t>(b[k]));
+    }
+    return double(h >> 11) * 0x1.0p-53;
+}
+
+// `clusters` clumps of `perCluster` opaque discs of radius `r`, each clump's discs within
+// `spread` of its centre: leaves of bushes, correlated where randomDiscs is not.
+vtex::ingest::TriangleMesh clusteredDiscs(int clusters, int perCluster, float spread, float r, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0, 1);
+    vtex::ingest::TriangleMesh mesh;
+    for (int c = 0; c < clusters; ++c) {
+        const float margin = spread + r;
+        const Eigen::Vector3f centre(margin + (1 - 2 * margin) * unit(rng), margin + (1 - 2 * margin) * unit(rng),
+                                     margin + (1 - 2 * margin) * unit(rng));
+        vtex::ingest::TriangleMesh clump = randomDiscs(perCluster, r, rng());
+        const auto first = std::uint32_t(mesh.positions.size());
+        // randomDiscs fills [r, 1 − r]³: squeeze it into the clump's cube.
+        for (Eigen::Vector3f& p : clump.positions) p = centre + 2 * spread * (p - Eigen::Vector3f::Constant(0.5f));
+        // Squeezing scales the discs too; grow them back to radius r about their centres (the
+        // first vertex of each fan).
+        constexpr std::size_t kFan = 17;
+        for (std::size_t d = 0; d + kFan <= clump.positions.size(); d += kFan)
+            for (std::size_t k = 1; k < kFan; ++k)
+                clump.positions[d + k] = clump.positions[d] + (clump.positions[d + k] - clump.positions[d]) / (2 * spread);
+        mesh.positions.insert(mesh.positions.end(), clump.positions.begin(), clump.positions.end());
+        mesh.normals.insert(mesh.normals.end(), clump.normals.begin(), clump.normals.end());
+        for (auto t : clump.triangles) mesh.triangles.push_back({t[0] + first, t[1] + first, t[2] + first});
+    }
+    return mesh;
+}
+
+}  // namespace
+
+// Closed forms for the chords of the shell fit. Their directions are cosine-weighted over zenith
+// angles up to 80° and each runs from the top face to the floor, so its length is 1/μ and the
+// mean length E[1/μ] = 2/(1 + cos 80°); a thin constant medium (ρ = 1e-4) lets through 1 − ρ·E[L]
+// (16384 chords: a standard error of 0.007 in E[L]).
+// A "mesh" that hides each unit-cube piece of a chord with probability 1 − e^(−κℓ), independently,
+// is a Poisson medium of extinction κ: the fitted scale of a constant texel of density ρ is κ/ρ,
+// within the noise of 4096 such draws.
+TEST(ShellChords, FollowTheirClosedForms) {
+    const double cos80 = std::cos(80 * std::numbers::pi / 180);
+    const auto thin = makeOctreeOf(1, 1e-4f);
+    const auto thinFit = vtex::octree::measureShellChords(*thin, [](const auto&, const auto&) { return true; }, 1, 1.0, 1, 16384);
+    EXPECT_NEAR((1 - thinFit.transmittance) / 1e-4, 2 / (1 + cos80), 0.03);
+    EXPECT_EQ(thinFit.visibility, 1.0);
+    const double rho = 2, kappa = 1.3;
+    const auto constant = makeOctreeOf(3, float(rho));
+    const auto poisson = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+        return segmentHash(a, b) < std::exp(-kappa * (b - a).norm());
+    };
+    const auto fits = vtex::octree::fitShellChords(*constant, poisson);
+    ASSERT_EQ(fits.size(), 4u);
+    for (std::size_t l = 0; l < fits.size(); ++l) {
+        EXPECT_NEAR(fits[l].scale, kappa / rho, 0.05 * kappa / rho) << "level " << l;
+        EXPECT_NEAR(fits[l].scale, fits[0].scale, 1e-9) << "level " << l;  // one medium, one answer
+    }
+}
+
+// The fit on a texel whose leaves cluster, as a bush's do: its coarse levels spread each clump
+// over whole voxels and are too opaque, its finest too transparent; once fitted, every level
+// lets through what the discs do, on shell chords it was not fitted on, within their noise.
+TEST(ShellChords, AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords) {
+    const vtex::ingest::TriangleMesh mesh = clusteredDiscs(40, 120, 0.06f, 0.012f, 11);
+    vtex::sampler::SampleOptions sampling;
+    sampling.resolution = 64;
+    sampling.bounds = vtex::sampler::BoundsMode::Unit;
+    vtex::NullProgress quiet;
+    const vtex::octree::Octree tree = vtex::octree::buildOctree(vtex::sampler::sampleMesh(mesh, sampling, quiet), {}, quiet);
+    const vtex::render::SourceVisibility visibility(mesh, tree.info.source);
+    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return visibility.visible(a, b); };
+    constexpr int kChords = 16384;
+    const auto fits = vtex::octree::fitShellChords(tree, visible, 1, kChords);
+    ASSERT_EQ(fits.size(), 7u);
+    for (std::size_t l = 0; l < fits.size(); ++l) {
+        const auto other = vtex::octree::measureShellChords(tree, visible, std::uint32_t(l), fits[l].scale, 1, kChords, 2);
+        const auto unfitted = vtex::octree::measureShellChords(tree, visible, std::uint32_t(l), 1.0, 1, kChords, 2);
+        std::cout << "level " << l << ": scale " << fits[l].scale << ", error on other chords " << unfitted.error()
+                  << " before, " << other.error() << " after\n";
+        // The fit's error on its own chords is 0; on others it is the difference of two means of
+        // T − v over 16384 chords, each with a standard error ≤ 1/√16384 = 0.008 (|T − v| ≤ 1).
+        EXPECT_LT(std::abs(other.error()), 0.03) << "level " << l;
+    }
+    EXPECT_LT(fits[0].scale, 0.9);  // clumps spread over the whole texel: too opaque
+    EXPECT_LT(vtex::octree::measureShellChords(tree, visible, 0, 1.0, 1, kChords, 2).error(), -0.1);
+    EXPECT_GT(fits[6].scale, 1.0);  // a voxel across one disc: too transparent
 }

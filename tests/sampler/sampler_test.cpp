@@ -1,6 +1,7 @@
 // The sampler: exact area, fitted ellipsoids, albedo, solid interior, cyclic volumes, regions.
 #include "meshes.h"
 
+#include <vtex/core/memory_budget.h>
 #include <vtex/octree/octree.h>
 #include <vtex/sampler/clip.h>
 #include <vtex/sampler/patterns.h>
@@ -10,6 +11,7 @@
 
 #include <map>
 #include <set>
+#include <stdexcept>
 
 namespace vtex::sampler {
 namespace {
@@ -374,7 +376,7 @@ TEST(Sampler, MaxMemoryRefusesUpFront) {
     EXPECT_GT(estimate, 100 * estimateSampleMemory(mesh, small) / 8);  // grows with the surface
     options.maxMemoryBytes = estimate / 2;
     CountingProgress progress;
-    EXPECT_THROW(sampleMesh(mesh, options, progress), MemoryLimitError);
+    EXPECT_THROW(sampleMesh(mesh, options, progress), vtex::MemoryLimitError);
     EXPECT_EQ(progress.total(), 0u);  // refused before any phase started
     // The estimate is an upper bound of what sampling really needs: the records and voxels.
     small.maxMemoryBytes = estimateSampleMemory(mesh, small);

@@ -3,8 +3,10 @@
 ///
 /// Each face is a bilinear patch P(u,v) = bilerp(P00, P10, P11, P01) given by four corners in
 /// counter-clockwise order; a triangle is a collapsed quad whose last corner repeats its third
-/// (quad[3] == quad[2]). Polygons with more than four corners are split into quads and a
-/// triangle by a fan from their first corner. World (scene) units.
+/// (quad[3] == quad[2]). Two triangles that were one quad of a triangulated export (consecutive
+/// as a fan, or sharing their longest edge; within 40° of planar and convex) are that quad again.
+/// Polygons with more than four corners are split into quads and a triangle by a fan from their
+/// first corner. World (scene) units.
 #pragma once
 
 #include <vtex/ingest/ingest.h>

@@ -44,6 +44,15 @@ struct IngestOptions {
     bool dropInvalidFaces = false;
     /// Orient closed meshes outward with CGAL (the normals follow).
     bool orientClosed = true;
+    /// The file's up axis, turned to vtex's +Z up by a rotation (exact in float: coordinates are
+    /// permuted and negated): 'x', 'y' or 'z'; 0 (the default) takes the file's own convention,
+    /// +Y for glTF (its specification's; Blender's exporter writes it) except the canonical .glb
+    /// vtex itself writes (asset.generator "vtex …", already +Z), +Z for OBJ, OFF, PLY and STL.
+    char up = 0;
+    /// Scale the mesh uniformly and move it so that its bounding box fits the unit cube, centred
+    /// in x and y with its base at z = 0 (`--fit cell`: a model ready to be sampled as a texel);
+    /// false keeps its coordinates.
+    bool fitCell = false;
     /// Coarse progress (one phase per step); never printed by the library.
     Progress* progress = nullptr;
 };
@@ -74,6 +83,10 @@ struct IngestReport {
     Eigen::Vector3f boundsMin{0, 0, 0};
     Eigen::Vector3f boundsMax{0, 0, 0};
     bool closed = false;
+    char up = 'z';            ///< the up axis the file was read with (turned to +Z)
+    bool fitCell = false;     ///< fitted to the unit cell: positions = scale · p + offset
+    double fitScale = 1;
+    Eigen::Vector3d fitOffset{0, 0, 0};
     RepairCounts repairs;
     std::vector<std::string> warnings;
     double seconds = 0.0;  ///< wall time of loadMesh()

@@ -61,6 +61,32 @@ struct BeamError {
 std::vector<BeamError> measureBeamTransmittance(const Octree& tree, const ChordVisibility& visible, double tau = 1,
                                                 int beams = 256, int chordsPerBeam = 256, std::uint64_t seed = 1);
 
+/// One level fitted over chords that cross the texel's shell as camera rays and shadow rays do:
+/// from the top face (z = 1) down to the floor (z = 0) through the texel tiled in x and y, the
+/// entry point uniform over the top face and the direction cosine-weighted (the flux through the
+/// face), zenith angles up to 80° (chords up to 5.8 shell heights long). `scale` is the factor of
+/// the level's densities whose mean transmittance over those chords equals the fraction of them
+/// that miss the source (Loubet & Neyret 2017 fit extinction to the opacity observed through the
+/// mesh; Vicini, Jakob & Kaplanyan 2021 over multi-voxel beams): below 1 where the level spreads
+/// clustered leaves over its voxels and is too opaque, above 1 where a voxel across one opaque
+/// leaf lets e^−1 through. Clamped to [1/64, 64]; 1 for a level without density.
+struct ShellChordFit {
+    double visibility = 0;     ///< fraction of the chords that miss the source
+    double transmittance = 0;  ///< the level's mean transmittance with its own densities
+    double scale = 1;
+    double error() const { return transmittance - visibility; }  ///< > 0: lets more through
+};
+/// Levels 0 … min(finestLevel, deepest) of `tree`, over `chords` shell chords (the same for every
+/// level; a pure function of `seed`, whatever the thread count). The visibility's standard error
+/// is ≤ 0.5/√chords.
+std::vector<ShellChordFit> fitShellChords(const Octree& tree, const ChordVisibility& visible, double tau = 1,
+                                          int chords = 4096, std::uint64_t seed = 1, std::uint32_t finestLevel = 30);
+/// The mean transmittance of `level` with its densities times `scale`, over `chords` shell chords
+/// drawn from `seed` (what fitShellChords equates to the visibility; for checking a fit on
+/// chords it was not fitted on).
+ShellChordFit measureShellChords(const Octree& tree, const ChordVisibility& visible, std::uint32_t level,
+                                 double scale, double tau = 1, int chords = 4096, std::uint64_t seed = 1);
+
 /// Visits the non-empty voxels of `level` that the segment a → b (inside the unit cube) crosses,
 /// front to back, as visit(node found, t0, t1) with [t0, t1] the distances from a along the
 /// segment (an exact Amanatides–Woo walk; a leaf above the level stands for its voxels).

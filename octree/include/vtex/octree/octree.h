@@ -135,9 +135,10 @@ Octree buildOctree(const SparseVolume& volume, const BuildOptions& options, Prog
 
 /// An upper estimate of the peak memory (bytes) of reading the .vtl `file` and building its
 /// octree, from the file's size alone, before it is read: 12× the file plus 32 MiB (the parsed
-/// volume, the uncompressed pyramid and the compressed tree; measured 9.7× for the bush at 256³,
-/// 6.9× for the 20000-leaf bush, checked in tests/cli/memory_limit_test.cpp). 0 for
-/// a file that cannot be stat'ed (its reader names the problem).
+/// volume, the uncompressed pyramid and the compressed tree; the peak is 10.0× the file for the
+/// bush at 256³, 7.1× for the 20000-leaf bush: `bench/memory_estimates.py build/apps/vtex/vtex
+/// /tmp/mem` at 1c31985, docs/render.md "Memory"; checked in tests/cli/memory_limit_test.cpp).
+/// 0 for a file that cannot be stat'ed (its reader names the problem).
 std::uint64_t estimateBuildMemory(const std::filesystem::path& file);
 
 /// The filter rule's name on the command line and in files: "neyret" or "sggx".

@@ -65,6 +65,8 @@ struct RenderStep {
     /// The texel renderer's mesh/volume hybrid (render::RenderOptions::hybrid) for texels with
     /// a source: the pipeline binds each built texel's source mesh.
     bool hybrid = true;
+    /// Each level's densities fitted to the source across the shell (render::RenderOptions::fitLevels).
+    bool levelFit = true;
     /// "default" or "exact" (render::ApproximationBudget::exact(): every approximation off).
     std::string approximations = "default";
     /// texel (`vtex render`) | reference (`vtex reference`: the texels' source meshes instead of

@@ -47,7 +47,6 @@ struct ImageOptions {
     std::uint64_t maxMemoryBytes = 0;
 };
 
-
 /// Every approximation of the texel renderer that trades error for time, in one place, each
 /// with its bound stated and tested (docs/render.md). exact() turns them all off: the render
 /// they are measured against. key() is what a pipeline's cache key and stats.json record.
@@ -102,6 +101,12 @@ struct RenderOptions : ImageOptions {
     /// one level. false: always the volume.
     bool hybrid = true;
     double hybridTolerance = 0.02;
+    /// For a texel with a source mesh, each level's densities are scaled by the factor that makes
+    /// its mean transmittance over chords crossing the shell (top face to floor, as camera and
+    /// shadow rays do) equal to the fraction of those chords that miss the mesh, measured at load
+    /// (octree::fitShellChords; docs/render.md, "Levels fitted to the source"). false: the
+    /// densities as filtered.
+    bool fitLevels = true;
 };
 
 struct RenderStats {
@@ -124,6 +129,8 @@ struct RenderStats {
     /// summed), and per texel the level past which its mesh takes over (−1: no mesh).
     double meshSegments = 0;
     std::vector<double> meshLevels;
+    /// Per texel, the factor of τ of each level (RenderOptions::fitLevels; empty: not fitted).
+    std::vector<std::vector<double>> levelScales;
     /// Texel renders: "exact", or ApproximationBudget::key() of the budget used.
     std::string approximations;
     /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:
@@ -138,12 +145,15 @@ struct RenderResult {
     std::vector<std::string> warnings;
 };
 
-/// An upper estimate of renderScene's peak memory (bytes), before anything is loaded: the image
-/// (20 bytes a pixel, 28 with AOVs: the RGBA floats and the encoders' copies; measured 16.7 and
-/// 24.5 on a 4096² render), what the scene loads, from its files' sizes without reading them
-/// (base meshes 32× their file, measured 16× for an OBJ grid; octrees and source meshes 3×,
-/// measured 2.2× on the bush field), and the shadow lattices' cap (256 MiB) when a texel meets a
-/// directional light. tests/cli/memory_limit_test.cpp checks it against measured peaks.
+/// An upper estimate of renderScene's peak memory (bytes), before anything is loaded: 16 MiB, the
+/// image (22 bytes a pixel, 30 with AOVs: the RGBA floats and the encoders' copies), what the
+/// scene loads, from its files' sizes without reading them (base meshes 32× their file, octrees
+/// and source meshes 3×), and the shadow lattices' cap (256 MiB) when a texel meets a
+/// directional light. `bench/memory_estimates.py build/apps/vtex/vtex /tmp/mem` measured (at
+/// 1c31985, docs/render.md "Memory") 20.1 and 28.2 bytes a pixel on a 4096² render with its
+/// PNG (hence 22 and 30: at 20 and 28 the 4096² render with --aov peaked 0.4 MiB above the
+/// estimate), 18.8× for an OBJ grid, 1.9× for the bush's octree and mesh.
+/// tests/cli/memory_limit_test.cpp checks it against measured peaks.
 std::uint64_t estimateRenderMemory(const Scene& scene, const RenderOptions& options);
 
 /// Loads what the scene references (meshes, octrees), builds the BVH and renders. Throws

@@ -14,7 +14,6 @@
 /// octree-aligned blocks. Work is O(triangles + pieces), memory O(occupied voxels), parallel.
 #pragma once
 
-#include <vtex/core/memory_budget.h>
 #include <vtex/core/progress.h>
 #include <vtex/ingest/mesh.h>
 #include <vtex/octree/volume.h>
@@ -22,7 +21,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
-#include <stdexcept>
 #include <string>
 
 namespace vtex::sampler {
@@ -50,17 +48,14 @@ struct SampleOptions {
     /// Sample only the voxels inside this box (finest voxel indices), for a partial recompute
     /// (octree::OctreeBuilder::updateRegion); the values equal a full sampling's bit for bit.
     std::optional<octree::VoxelBox> region;
-    /// Refuse (MemoryLimitError, before any work) when estimateSampleMemory() exceeds this; 0 =
-    /// no limit.
+    /// Refuse (vtex::MemoryLimitError, before any work) when estimateSampleMemory() exceeds
+    /// this; 0 = no limit.
     std::uint64_t maxMemoryBytes = 0;
-    /// The mesh's file, named in a MemoryLimitError.
+    /// The mesh's file, named in a vtex::MemoryLimitError.
     std::filesystem::path source;
     /// Surface voxels on which the fit error is measured (hash-selected sample); 0 = all.
     std::uint64_t fitErrorSamples = 4096;
 };
-
-/// The resolution or the footprint would exceed the caller's memory limit (core's error, exit 3).
-using vtex::MemoryLimitError;
 
 /// An upper estimate of the peak memory sampleMesh() needs (bytes), from the triangles' areas
 /// and perimeters in voxel units: O(triangles), no allocation.
@@ -71,8 +66,8 @@ void referenceMapping(const ingest::TriangleMesh& mesh, BoundsMode bounds, doubl
                       std::array<double, 3>& offset);
 
 /// Samples `mesh`. Throws std::invalid_argument for a bad resolution or a region outside the
-/// volume, MemoryLimitError (see maxMemoryBytes), vtex::InputError when `--solid on` is asked
-/// of an open mesh.
+/// volume, vtex::MemoryLimitError (see maxMemoryBytes), vtex::InputError when `--solid on` is
+/// asked of an open mesh.
 octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOptions& options,
                                 Progress& progress);
 
