@@ -11,23 +11,24 @@ COMMANDS = ["ingest", "pattern", "sample", "build", "inspect", "render", "refere
             "help"]
 FLAGS = {
     "": ["-q", "--quiet", "-v", "--verbose", "--help", "--version", "-h"],
-    "ingest": ["-o", "--output", "--report", "--max-triangles", "--weld-tolerance", "--drop-invalid"],
+    "ingest": ["-o", "--output", "--report", "--max-triangles", "--weld-tolerance", "--drop-invalid", "--up", "--fit"],
     "pattern": ["-o", "--output", "--seed", "--count", "--leaves", "--fluctuation", "--lean", "--variant"],
     "sample": ["-o", "--output", "-r", "--resolution", "--cyclic", "--solid", "--solid-density", "--bounds",
-               "--max-memory"],
-    "build": ["-o", "--output", "--filter", "--tolerance", "--filter-error-samples", "--max-memory", "--source"],
+               "--max-memory", "--threads"],
+    "build": ["-o", "--output", "--filter", "--tolerance", "--filter-error-samples", "--max-memory", "--source",
+              "--threads"],
     "inspect": ["--json", "--source"],
     "render": ["-o", "--output", "--png", "--width", "--height", "--stats", "--threads", "--aov", "--max-memory",
-               "--spp", "--lod-bias", "--shadow-refresh", "--exact", "--hybrid", "--shading"],
+               "--spp", "--lod-bias", "--shadow-refresh", "--exact", "--hybrid", "--shading", "--level-fit"],
     "reference": ["-o", "--output", "--png", "--width", "--height", "--stats", "--threads", "--aov", "--spp",
                   "--mode", "--tolerance", "--max-memory"],
     "compare": ["--json", "--diff"],
-    "run": ["-o", "--output", "--force", "--jobs", "--max-memory", "--wait"],
-    "demo": ["-o", "--output", "--resolution", "--scale", "--seed", "--force", "--jobs"],
+    "run": ["-o", "--output", "--force", "--jobs", "--max-memory", "--wait", "--threads"],
+    "demo": ["-o", "--output", "--resolution", "--scale", "--seed", "--force", "--jobs", "--threads"],
 }
 ALL_FLAGS = sorted({f for fl in FLAGS.values() for f in fl})
-WORDS = ["grass", "bush", "fur", "brushed", "blocks", "neyret", "sggx", "auto", "on", "off", "unit", "fit",
-         "fast", "reference", "embedded", "deformed", "concentric", "radial", "4GiB", "512MB", "1KB", "0B", "-",
+WORDS = ["grass", "bush", "fur", "brushed", "blocks", "neyret", "sggx", "auto", "on", "off", "unit", "fit", "cell",
+         "keep", "fast", "reference", "embedded", "deformed", "concentric", "radial", "4GiB", "512MB", "1KB", "0B", "-",
          "--", "=", "true", "x"]
 NUMBERS = ["nan", "NaN", "-nan", "inf", "-inf", "infinity", "-0", "0", "-0.0", "1e308", "-1e308", "1e-308", "4.9e-324",
            "1e309", "1", "2", "3", "4", "7", "8", "16", "64", "128", "1024", "4096", "16384", "16385", "65536",
@@ -110,26 +111,29 @@ def mutate_token(rng, token, argv):
 # None a flag.
 CHOICES = {"pattern": ["grass", "bush", "fur", "brushed", "blocks"], "solid": ["auto", "on", "off"],
            "bounds": ["auto", "unit", "fit"], "filter": ["neyret", "sggx"], "hybrid": ["on", "off"],
-           "shading": ["fast", "reference"], "mode": ["embedded", "deformed"], "variant": ["concentric", "radial"]}
+           "shading": ["fast", "reference"], "mode": ["embedded", "deformed"], "variant": ["concentric", "radial"],
+           "up": ["x", "y", "z"], "fit": ["keep", "cell"], "level-fit": ["on", "off"]}
 IMAGE = {"-o": "out", "--png": "out", "--stats": "out", "--width": "num", "--height": "num", "--threads": "num",
          "--max-memory": "size",
          "--aov": None}
 OPTIONS = {
     "ingest": {"-o": "out", "--report": "out", "--max-triangles": "num", "--weld-tolerance": "num",
-               "--drop-invalid": None},
+               "--drop-invalid": None, "--up": CHOICES["up"], "--fit": CHOICES["fit"]},
     "pattern": {"-o": "out", "--seed": "num", "--count": "num", "--leaves": "num", "--fluctuation": "num",
                 "--lean": "num", "--variant": CHOICES["variant"]},
     "sample": {"-o": "out", "-r": "num", "--cyclic": None, "--solid": CHOICES["solid"], "--solid-density": "num",
-               "--bounds": CHOICES["bounds"], "--max-memory": "size"},
+               "--bounds": CHOICES["bounds"], "--max-memory": "size", "--threads": "num"},
     "build": {"-o": "out", "--filter": CHOICES["filter"], "--tolerance": "num", "--filter-error-samples": "num",
-              "--max-memory": "size", "--source": "in"},
+              "--max-memory": "size", "--source": "in", "--threads": "num"},
     "inspect": {"--json": None, "--source": "in"},
     "render": dict(IMAGE, **{"--spp": "num", "--lod-bias": "num", "--shadow-refresh": "num", "--exact": None,
-                             "--hybrid": CHOICES["hybrid"], "--shading": CHOICES["shading"]}),
+                             "--hybrid": CHOICES["hybrid"], "--shading": CHOICES["shading"],
+                             "--level-fit": CHOICES["level-fit"]}),
     "reference": dict(IMAGE, **{"--spp": "num", "--mode": CHOICES["mode"], "--tolerance": "num"}),
     "compare": {"--json": None, "--diff": "out"},
-    "run": {"-o": "dir", "--force": None, "--jobs": "num", "--max-memory": "size", "--wait": None},
-    "demo": {"-o": "dir", "--resolution": "num", "--scale": "num", "--seed": "num", "--force": None, "--jobs": "num"},
+    "run": {"-o": "dir", "--force": None, "--jobs": "num", "--max-memory": "size", "--wait": None, "--threads": "num"},
+    "demo": {"-o": "dir", "--resolution": "num", "--scale": "num", "--seed": "num", "--force": None, "--jobs": "num",
+             "--threads": "num"},
 }
 SMALL = ["0", "1", "2", "4", "8", "16", "0.5", "0.01", "-1", "1e-6"]
 SIZES = ["0", "1", "1KB", "64MB", "512MB", "4GiB", "1e3", "-1", "nan", "", "1TB", "18446744073709551616"]
