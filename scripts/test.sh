@@ -2,15 +2,16 @@
 # The README's test command (and CI's): install what is missing, build, run the whole suite.
 #   bash scripts/test.sh [ctest arguments…]
 #   bash scripts/test.sh --sanitize [ctest arguments…]   the same suite built with AddressSanitizer
-#       and UBSan (optimised, in build-asan/; the fuzz smoke run, which has its own sanitized
-#       build, is left out); CI runs both.
+#       and UBSan (optimised, in build-asan/; the fuzz smoke runs are left out: fuzz_smoke has its
+#       own sanitized build, and fuzz_cli_smoke's limits, 5 s and 1 GiB a run, are set for a
+#       build without the sanitizers); CI runs both.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 configure=()
 if [[ ${1:-} == --sanitize ]]; then
     shift
     build_dir=${VTEX_BUILD_DIR:-$root/build-asan}
-    configure=(-DVTEX_SANITIZE=ON -DVTEX_FUZZ_SMOKE=OFF)
+    configure=(-DVTEX_SANITIZE=ON -DVTEX_FUZZ_SMOKE=OFF -DVTEX_FUZZ_CLI_SMOKE=OFF)
     # Any report fails the test that triggered it; leaks are reports too.
     export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1}
     export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}

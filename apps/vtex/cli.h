@@ -59,6 +59,15 @@ const Inspector* findInspector(const std::string& extension);
 /// and an infinite or NaN flag would reach the stages as a value. Checked before any range.
 CLI::Validator finiteNumber();
 
+/// Accepts a whole number from `least` to `most`, written in decimal digits only: CLI11 took -1
+/// for an unsigned option's 2⁶⁴ − 1 and saturated larger numbers (found by fuzz_cli.py), and its
+/// own ranges print their bounds as doubles of 300 digits.
+CLI::Validator wholeNumber(std::uint64_t least, std::uint64_t most);
+
+/// Accepts a seed: a whole number from 0 to 2⁶³ − 1, what a pipeline file can hold (TOML integers
+/// are signed 64-bit); `vtex demo --seed -1` wrote a pipeline it then could not read.
+CLI::Validator seedNumber();
+
 /// `--max-memory SIZE` into `limit`, which starts at vtex::defaultMemoryLimit() (half of this
 /// machine's physical memory): a resolution, image or volume too large for it is refused at once
 /// with its estimate (exit 3) instead of running into the kernel's OOM killer. `work` says what

@@ -48,6 +48,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         ->check(CLI::Range(0.0, 1e6));
     app.add_option("--filter-error-samples", flags->filterErrorSamples,
                    "Nodes per level on which the filter error is measured (0 = all)")
+        ->check(wholeNumber(0, ~std::uint64_t(0)))
         ->capture_default_str();
     addMaxMemoryOption(app, flags->maxMemory, "reading the volume and building its octree");
     addThreadsOption(app, flags->threads);

@@ -23,7 +23,9 @@ const bool registered = registerCommand(90, [](CLI::App& app) -> Action {
         ->check(finiteNumber())
         ->capture_default_str()
         ->check(CLI::Range(0.05, 4.0));
-    app.add_option("--seed", options->seed, "Seed of the procedural patterns")->capture_default_str();
+    app.add_option("--seed", options->seed, "Seed of the procedural patterns")
+        ->check(seedNumber())
+        ->capture_default_str();
     app.add_flag("--force", options->force, "Redo every stage, cached or not");
     app.add_option("--jobs", options->run.jobs, "Stages run at once (0: as many as cores)")->check(CLI::Range(0, 1024));
     auto threads = std::make_shared<int>(0);

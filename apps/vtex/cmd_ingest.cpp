@@ -32,7 +32,7 @@ const bool registered = registerCommand(10, [](CLI::App& app) -> Action {
     app.add_option("--max-triangles", flags->options.maxTriangles,
                    "Refuse meshes with more triangles than this")
         ->capture_default_str()
-        ->check(CLI::PositiveNumber);
+        ->check(wholeNumber(1, ~std::uint64_t(0)));
     app.add_option("--weld-tolerance", flags->options.weldTolerance,
                    "Merge vertices closer than this fraction of the bounding-box diagonal")
         ->check(finiteNumber())

@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
 
     std::vector<std::string> args = normalisedArguments(argc, argv);
     if (const auto unknown = unknownCommandMessage(args, app)) {
-        std::cerr << "vtex: error: " << *unknown << "\n";
+        std::cerr << "vtex: error: " << oneLine(*unknown) << "\n";  // it quotes the argument: one line (fuzz_cli.py)
         return exitCode(ExitStatus::Usage);
     }
     std::reverse(args.begin(), args.end());  // CLI11 takes a vector last argument first

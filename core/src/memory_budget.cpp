@@ -18,7 +18,8 @@ std::string formatBytes(std::uint64_t bytes) {
     const double b = double(bytes);
     if (b >= double(1ull << 30)) std::snprintf(text, sizeof text, "%.1f GiB", b / double(1ull << 30));
     else if (b >= double(1ull << 20)) std::snprintf(text, sizeof text, "%.0f MiB", b / double(1ull << 20));
-    else std::snprintf(text, sizeof text, "%.0f KiB", b / 1024.0);
+    else if (b >= 1024.0) std::snprintf(text, sizeof text, "%.0f KiB", b / 1024.0);
+    else std::snprintf(text, sizeof text, "%llu B", (unsigned long long)bytes);  // `--max-memory 1` was "0 KiB"
     return text;
 }
 

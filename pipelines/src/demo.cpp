@@ -9,8 +9,10 @@
 #include <cstdio>
 #include <map>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 namespace vtex::pipelines {
@@ -83,6 +85,10 @@ void writeScene(const fs::path& file, const std::string& title, const Shot& shot
 }  // namespace
 
 RunReport runDemo(const DemoOptions& options) {
+    // The seed goes into the pipeline file, whose integers are signed 64-bit: a larger one made
+    // a pipeline the demo could not read, after its inputs were written (found by fuzz_cli.py).
+    if (options.seed > std::uint64_t(std::numeric_limits<std::int64_t>::max()))
+        throw std::invalid_argument("demo: the seed must be at most 2^63 - 1");
     // The inputs are written before runPipeline() checks the folder: checked here first.
     checkOutputFolder(options.outputDirectory);
     const fs::path inputs = options.outputDirectory / "inputs";

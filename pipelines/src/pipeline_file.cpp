@@ -10,6 +10,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 namespace vtex::pipelines {
 namespace {
@@ -38,6 +39,29 @@ void requireFile(const TomlReader& reader, const std::string& key, const fs::pat
     if (fs::exists(status)) reader.fail(key, "not a regular file: " + path.string());
     reader.fail(key, "no such file: " + path.string() + (error && error != std::errc::no_such_file_or_directory
                                                             ? " (" + error.message() + ")" : ""));
+}
+
+// A pattern source made as the runner will make it, at 64 elements at most: a bad option (a
+// lean past ±80°, which makePattern refuses) or a count whose mesh vtex could not read back
+// (sampler::kMaxPatternTriangles; `brushed` with a count of 10⁶ is about 5·10⁸ triangles) is
+// the file's error at once, not a failure or an exhausted memory half-way through a run.
+void checkPattern(const TomlReader& reader, const std::string& path, const SourceStep& s) {
+    sampler::PatternOptions o;
+    o.seed = s.seed;
+    o.count = s.count == 0 ? 1 : s.count;  // every pattern's default count is small: one element checks the rest
+    o.fluctuation = s.fluctuation;
+    o.leanDegrees = s.leanDegrees;
+    o.variant = s.variant;
+    std::uint64_t triangles = 0;
+    try {
+        triangles = sampler::estimatePatternTriangles(s.pattern, o);
+    } catch (const std::invalid_argument& e) {
+        reader.fail(path, e.what());
+    }
+    if (triangles > sampler::kMaxPatternTriangles)
+        reader.fail(TomlReader::join(path, "count"),
+                    std::to_string(s.count) + " makes about " + std::to_string(triangles) + " triangles, more than the " +
+                        std::to_string(sampler::kMaxPatternTriangles) + " vtex ingests");
 }
 
 }  // namespace
@@ -96,6 +120,7 @@ Pipeline loadPipeline(const fs::path& file) {
                 reader.fail(TomlReader::join(path, key),
                             hasPattern ? "the " + s.pattern + " pattern does not use it (" + sampler::patternsUsing(key) + " do)"
                                        : std::string("a file source has no pattern options"));
+        if (hasPattern) checkPattern(reader, path, s);
         pipeline.sources.push_back(s);
     }
 

@@ -502,7 +502,9 @@ std::string patternsUsing(std::string_view option) {
     return text.empty() ? "no pattern" : text;
 }
 
-ingest::TriangleMesh makePattern(std::string_view name, const PatternOptions& options) {
+namespace {
+
+ingest::TriangleMesh build(std::string_view name, const PatternOptions& options) {
     if (options.count < 0 || options.count > 10'000'000) throw std::invalid_argument("count out of range");
     if (!std::isfinite(options.fluctuation) || options.fluctuation > kPi)
         throw std::invalid_argument("fluctuation must be at most π radians");
@@ -514,6 +516,27 @@ ingest::TriangleMesh makePattern(std::string_view name, const PatternOptions& op
     if (name == "brushed") return brushed(options);
     if (name == "blocks") return blocks(options);
     throw std::invalid_argument("unknown pattern '" + std::string(name) + "' (grass, bush, fur, brushed, blocks)");
+}
+
+}  // namespace
+
+std::uint64_t estimatePatternTriangles(std::string_view name, const PatternOptions& options) {
+    constexpr int kSample = 64;
+    if (options.count <= kSample) return build(name, options).triangles.size();
+    PatternOptions sample = options;
+    sample.count = kSample;
+    return build(name, sample).triangles.size() * std::uint64_t(options.count) / kSample;
+}
+
+ingest::TriangleMesh makePattern(std::string_view name, const PatternOptions& options) {
+    if (options.count > 64) {
+        const std::uint64_t triangles = estimatePatternTriangles(name, options);
+        if (triangles > kMaxPatternTriangles)
+            throw std::invalid_argument("a count of " + std::to_string(options.count) + " makes about " +
+                                        std::to_string(triangles) + " triangles, more than the " +
+                                        std::to_string(kMaxPatternTriangles) + " vtex ingests");
+    }
+    return build(name, options);
 }
 
 }  // namespace vtex::sampler

@@ -179,8 +179,12 @@ std::uint64_t estimateSampleMemory(const ingest::TriangleMesh& mesh, const Sampl
         pieces += 1.75 * area + 2 * perimeter + 2;
     }
     // Records twice (chunks and buckets), voxels at most one per piece, per-triangle data, and
-    // a solid classification proportional to the surface.
-    const double bytes = pieces * (2.0 * sizeof(Record) + sizeof(VolumeBlock) + 16) +
+    // a solid classification proportional to the surface. Then the volume's file, which writeVtl
+    // builds in memory beside the volume (serializeVtl's VOXL section, 54 bytes a voxel, then the
+    // container's copy of it): without it, a surface across the whole domain (fuzz_cli.py's
+    // hill.obj at 4096³, 3·10⁷ voxels) peaked at 7.6 GiB against an estimate of 4.3 GiB.
+    constexpr double kVtlBytesPerVoxel = 8 + 1 + 1 + 4 * 11;  // octree/src/volume.cpp, kBlockRecordSize
+    const double bytes = pieces * (2.0 * sizeof(Record) + sizeof(VolumeBlock) + 16 + 2 * kVtlBytesPerVoxel) +
                          double(mesh.triangles.size()) * 64 + double(mesh.positions.size()) * 48 + (1 << 20);
     return std::uint64_t(std::min(bytes, 1.8e19));
 }

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+namespace fs = std::filesystem;
 using vtex::test::runVtex;
 
 TEST(Cli, VersionPrintsTheProjectVersion) {
@@ -75,6 +76,44 @@ TEST(Cli, FuzzAnArgumentHoldingANewlineStillGivesAOneLineError) {
     const auto bad = runVtex({"render", "no\nsuch\r.toml", "-o", "x.exr"});
     EXPECT_EQ(bad.exitStatus, 3) << bad.err;
     EXPECT_EQ(vtex::test::lineCount(bad.err), 1u) << bad.err;
+}
+
+// Found by fuzz_cli.py (rechecking the first campaign's flags; fuzz/corpus-cli/regression_10):
+// the unknown-command message (29ee2e2) quotes the argument and was printed without oneLine, so
+// `vtex "new<LF>line.exr" …` split its error over two lines.
+TEST(Cli, FuzzAnUnknownCommandHoldingANewlineIsOneLine) {
+    const auto r = runVtex({"new\nline.exr", "16384", "reference", "scene.toml"});
+    EXPECT_EQ(r.exitStatus, 2) << r.err;
+    EXPECT_EQ(r.err, "vtex: error: unknown command 'new line.exr' (vtex --help lists the commands)\n");
+}
+
+// Found reading the third fuzz_cli.py campaign's seed and --max-memory findings (a97f912,
+// c77d4a0) for the same cause: CLI11 takes -1 for an unsigned option's 2⁶⁴ − 1 and saturates
+// larger numbers, so `build --filter-error-samples -1` meant "every node" with exit 0, and its
+// range check printed `--max-triangles -1` as "not in range 0.000000 to 1797…" (309 digits).
+// A count is a whole number in decimal digits, refused otherwise naming the option.
+TEST(Cli, FuzzANegativeOrOverflowingCountIsBadUsage) {
+    const fs::path dir = fs::path(VTEX_TEST_TMP) / "cli_counts";
+    fs::create_directories(dir);
+    std::ofstream(dir / "plane.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    const std::string obj = (dir / "plane.obj").string(), glb = (dir / "plane.glb").string();
+    fs::remove(glb);
+    for (const std::string value : {"-1", "18446744073709551616", "0", "1.5"}) {
+        const auto r = runVtex({"ingest", obj, "-o", glb, "--max-triangles", value});
+        EXPECT_EQ(r.exitStatus, 2) << value << ": " << r.err;
+        EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
+                  "vtex: error: --max-triangles: must be a whole number from 1 to 18446744073709551615")
+            << value;
+        EXPECT_FALSE(fs::exists(glb)) << value;
+    }
+    ASSERT_EQ(runVtex({"ingest", obj, "-o", glb, "--max-triangles", "2"}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"sample", glb, "-o", (dir / "p.vtl").string(), "-r", "4"}).exitStatus, 0);
+    const auto r = runVtex({"build", (dir / "p.vtl").string(), "-o", (dir / "p.vto").string(),
+                            "--filter-error-samples", "-1"});
+    EXPECT_EQ(r.exitStatus, 2) << r.err;
+    EXPECT_NE(r.err.find("--filter-error-samples: must be a whole number from 0 to 18446744073709551615"),
+              std::string::npos)
+        << r.err;
 }
 
 // `vtex ingest --up/--fit` (issue 16): a Z-up OBJ read as Y-up and fitted into the cell lands in

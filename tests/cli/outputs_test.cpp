@@ -171,11 +171,11 @@ TEST(Outputs, ASecondRunOnAFolderInUseIsRefused) {
     EXPECT_FALSE(fs::exists(theirs)) << "the run that holds the lock clears a dead writer's temporaries";
 }
 
-// Found by fuzz_cli.py (fuzz/corpus-cli/regression_3; `vtex inspect`, regression_4, by reading
-// for the same call after): a file name too long for the system made std::filesystem's
-// throwing calls escape with their own message ("filesystem error: status: File name too long
-// [...]"). An output that cannot be created is vtex's failure to write it (exit 1), an input
-// that cannot be found is no such file (exit 3).
+// Found by fuzz_cli.py (fuzz/corpus-cli/regression_3, regression_9; `vtex inspect`,
+// regression_4, by reading for the same call after): a file name too long or a link loop made
+// std::filesystem's throwing calls escape with their own message ("filesystem error: status:
+// File name too long [...]"). An output that cannot be created is vtex's failure to write it
+// (exit 1), an input that cannot be found is no such file (exit 3).
 TEST(Outputs, FuzzANameTooLongGetsVtexsOwnOneLineMessage) {
     const Specials s = makeSpecials("too_long");
     const std::string name = (s.dir / std::string(300, 'a')).string();
@@ -186,6 +186,12 @@ TEST(Outputs, FuzzANameTooLongGetsVtexsOwnOneLineMessage) {
     const auto in = runVtex({"inspect", name + ".vto"});
     EXPECT_EQ(in.exitStatus, 3) << in.err;
     EXPECT_NE(in.err.find(".vto: no such file"), std::string::npos) << in.err;
+    // A link loop in the way (regression_9): no such folder, in vtex's words.
+    fs::create_symlink("loop-b", s.dir / "loop-a");
+    fs::create_symlink("loop-a", s.dir / "loop-b");
+    const auto loop = runVtex({"pattern", "grass", "--count", "4", "-o", (s.dir / "loop-a" / "x.glb").string()});
+    EXPECT_EQ(loop.exitStatus, 1) << loop.err;
+    EXPECT_NE(loop.err.find("x.glb: output directory does not exist"), std::string::npos) << loop.err;
     for (const auto& entry : fs::directory_iterator(s.dir))
         EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
 }
@@ -220,4 +226,27 @@ TEST(Outputs, AnImageFormatFollowsItsNameAndCompareReadsBoth) {
             EXPECT_FALSE(fs::exists(s.dir / "x.tif") || fs::exists(s.dir / "x.exr") || fs::exists(s.dir / "y.exr"));
         }
     }
+}
+
+// Found by fuzz_cli.py (third campaign, fuzz/corpus-cli/regression_16, a timeout): `vtex sample
+// hill.obj -r 4096 -o missing/x.vtl` sampled for 20 s and more before finding, on writing, that
+// the output's folder does not exist (exit 1). A new path in a missing folder (or behind a file
+// or a link loop) is refused before any work: here before the memory estimate that would refuse
+// the work itself (exit 3), which came first.
+TEST(Outputs, FuzzAnOutputInAMissingFolderIsRefusedBeforeAnyWork) {
+    const Specials s = makeSpecials("missing_folder");
+    const fs::path scene = writePlaneScene(s.dir);
+    std::ofstream(s.dir / "not-a-folder") << "x";
+    for (const std::string folder : {"missing", "not-a-folder"}) {
+        const std::string out = (s.dir / folder / "x.out").string();
+        for (const std::vector<std::string>& args :
+             {std::vector<std::string>{"sample", (s.dir / "plane.obj").string(), "-o", out, "-r", "1048576"},
+              {"render", scene.string(), "-o", out, "--width", "16384", "--height", "16384", "--max-memory", "1MiB"},
+              {"pattern", "brushed", "-o", out, "--count", "10000000"}}) {
+            const auto r = runVtex(args);
+            EXPECT_EQ(r.exitStatus, 1) << args[0] << ": " << r.err;
+            EXPECT_EQ(r.err, "vtex: error: " + out + ": output directory does not exist\n") << args[0];
+        }
+    }
+    EXPECT_FALSE(fs::exists(s.dir / "missing"));
 }

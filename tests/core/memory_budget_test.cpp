@@ -42,3 +42,14 @@ TEST(MemoryBudget, TheRefusalNamesTheFileTheWorkAndBothFigures) {
     EXPECT_NO_THROW(vtex::checkMemoryEstimate("a", "b", ~std::uint64_t(0), 0));  // 0: no limit
     EXPECT_GT(vtex::defaultMemoryLimit(), std::uint64_t(0));
 }
+
+// Found by fuzz_cli.py (third campaign): `vtex run … --max-memory 1` was refused with "more
+// than the limit of 0 KiB". Less than a KiB is written in bytes.
+TEST(MemoryBudget, FuzzASmallLimitIsWrittenInBytes) {
+    EXPECT_EQ(vtex::formatBytes(0), "0 B");
+    EXPECT_EQ(vtex::formatBytes(1), "1 B");
+    EXPECT_EQ(vtex::formatBytes(1023), "1023 B");
+    EXPECT_EQ(vtex::formatBytes(1024), "1 KiB");
+    EXPECT_EQ(vtex::formatBytes(3u << 20), "3 MiB");
+    EXPECT_EQ(vtex::formatBytes(std::uint64_t(5) << 30), "5.0 GiB");
+}

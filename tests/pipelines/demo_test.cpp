@@ -88,4 +88,27 @@ TEST(Demo, RefusesABadResolutionOrScaleAsBadUsage) {
     EXPECT_FALSE(fs::exists(dir));
 }
 
+// Found by fuzz_cli.py (third campaign, fuzz/corpus-cli/regression_14): `vtex demo -o DIR --seed
+// -1` was taken for the seed 2⁶⁴ − 1, which the demo wrote into DIR/inputs/pipeline.toml and then
+// could not read back (TOML integers are signed 64-bit): exit 3, "not representable in 64 bits",
+// naming a file of its own, with DIR/inputs left behind. A seed outside [0, 2⁶³ − 1] is bad
+// usage, for `vtex pattern` too (where -1 silently made the mesh of seed 2⁶⁴ − 1).
+TEST(Demo, FuzzASeedAPipelineCannotHoldIsBadUsage) {
+    const fs::path dir = fs::path(VTEX_TEST_TMP) / "demo_seed";
+    fs::remove_all(dir);
+    const std::string glb = (fs::path(VTEX_TEST_TMP) / "demo_seed.glb").string();
+    fs::remove(glb);  // made by the end of an earlier run
+    for (const std::string seed : {"-1", "9223372036854775808", "18446744073709551616", "1.5", "x"}) {
+        for (const std::vector<std::string>& args : {std::vector<std::string>{"demo", "-o", dir.string(), "--seed", seed},
+                                                     {"pattern", "grass", "-o", glb, "--seed", seed}}) {
+            const auto r = runVtex(args);
+            EXPECT_EQ(r.exitStatus, 2) << args[0] << " --seed " << seed << ": " << r.err;
+            EXPECT_NE(r.err.find("--seed: must be a whole number from 0 to 9223372036854775807"), std::string::npos) << r.err;
+        }
+        EXPECT_FALSE(fs::exists(dir)) << seed;
+        EXPECT_FALSE(fs::exists(glb)) << seed;
+    }
+    EXPECT_EQ(runVtex({"pattern", "grass", "-o", glb, "--seed", "9223372036854775807"}).exitStatus, 0);
+}
+
 }  // namespace

@@ -521,3 +521,27 @@ TEST(Pipeline, FuzzAPathHoldingANulIsRefusedNamingTheKey) {
         EXPECT_NE(r.err.find(key + ": a path may not hold a NUL character"), std::string::npos) << r.err;
     }
 }
+
+// A pattern source is checked as `vtex pattern` checks it, when the file is read (found while
+// triaging fuzz_cli.py's `pattern brushed --count 2097152`, which grew past 6 GB): a count whose
+// mesh would exceed what ingest reads (brushed, 10⁶ rings: about 4·10⁹ triangles) was accepted
+// and the run ran out of memory; a lean the reader allows (±89°) but the pattern refuses (±80°)
+// failed the source stage half-way through the run. Both are the file's error, exit 3, before
+// anything runs.
+TEST(Pipeline, FuzzAPatternSourceIsCheckedWhenTheFileIsRead) {
+    const fs::path dir = makeProject("pattern_checked");
+    const std::string good = vtex::test::readText(dir / "pipeline.toml");
+    for (const auto& [from, to, message] : std::vector<std::array<std::string, 3>>{
+             {"pattern = \"grass\"\ncount = 8", "pattern = \"brushed\"\ncount = 1000000",
+              "source[0].count: 1000000 makes about"},
+             {"count = 8", "count = 8\nlean = 85", "source[0]: lean must be within ±80 degrees"}}) {
+        std::string bad = good;
+        bad.replace(bad.find(from), from.size(), to);
+        writeText(dir / "pipeline.toml", bad);
+        const auto r = vtex::test::runVtex({"run", (dir / "pipeline.toml").string()});
+        EXPECT_EQ(r.exitStatus, 3) << to << "\n" << r.err;
+        EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+        EXPECT_EQ(vtex::test::lineCount(r.err), 1u) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "out")) << "nothing may run: " << to;
+    }
+}

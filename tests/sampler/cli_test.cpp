@@ -150,5 +150,55 @@ TEST(SamplerCli, UsageErrorsAndMemoryLimit) {
     EXPECT_FALSE(fs::exists(never));
 }
 
+// Found by fuzz_cli.py (second campaign, fuzz/corpus-cli/regression_11): `vtex pattern
+// brushed --variant radial --count 2097152` was accepted (the count is checked against 10⁷ only)
+// and grew past 6 GB building about 10⁹ triangles, a mesh no other command would read. A count
+// whose mesh exceeds what ingest accepts (sampler::kMaxPatternTriangles) is bad usage naming
+// the option, refused before the work; one just inside is made.
+TEST(SamplerCli, FuzzAPatternCountTooLargeToIngestIsBadUsage) {
+    const auto glb = tmp("too_many.glb");
+    std::filesystem::remove(glb);
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"pattern", "brushed", "--variant", "radial", "--count", "2097152"},
+          {"pattern", "bush", "--leaves", "10000000"}}) {
+        std::vector<std::string> command = args;
+        command.insert(command.end(), {"-o", glb.string()});
+        const auto r = runVtex(command);
+        EXPECT_EQ(r.exitStatus, 2) << args[1] << ": " << r.err;
+        EXPECT_NE(r.err.find(args[args.size() - 2] + ": " + args.back() + " makes about"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("triangles, more than the 50000000 vtex ingests"), std::string::npos) << r.err;
+        EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+        EXPECT_FALSE(fs::exists(glb));
+    }
+    EXPECT_EQ(runVtex({"pattern", "brushed", "--variant", "radial", "--count", "200", "-o", glb.string()}).exitStatus, 0);
+    EXPECT_TRUE(fs::exists(glb));
+}
+
+// Found by fuzz_cli.py (third campaign; fuzz/corpus-cli/regression_12): `vtex build IN -o
+// out.vto --source small.exr` wrote the octree, then read the source and exited 3, leaving
+// out.vto behind; a missing source did the same, and with -q the source was not read at all.
+// The source is read before any output is written.
+TEST(SamplerCli, FuzzABadBuildSourceLeavesNoOctree) {
+    const auto glb = tmp("build_source.glb"), vtl = tmp("build_source.vtl"), vto = tmp("build_source.vto");
+    ASSERT_EQ(runVtex({"pattern", "bush", "--count", "40", "-o", glb.string()}).exitStatus, 0);
+    ASSERT_EQ(runVtex({"sample", glb.string(), "-o", vtl.string(), "-r", "8"}).exitStatus, 0);
+    std::ofstream(tmp("not_a_mesh.exr")) << "x";
+    for (const std::vector<std::string>& extra :
+         {std::vector<std::string>{"--source", tmp("not_a_mesh.exr").string()},
+          {"--source", tmp("missing.glb").string()},
+          {"-q", "--source", tmp("missing.glb").string()}}) {
+        fs::remove(vto);
+        std::vector<std::string> args = {"build", vtl.string(), "-o", vto.string()};
+        args.insert(args.end(), extra.begin(), extra.end());
+        const auto r = runVtex(args);
+        EXPECT_EQ(r.exitStatus, 3) << extra.back() << ": " << r.err;
+        EXPECT_NE(r.err.find("vtex: error: " + extra.back() + ": "), std::string::npos) << r.err;
+        EXPECT_EQ(lineCount(r.err), 1u) << r.err;  // no status line: nothing was built
+        EXPECT_FALSE(fs::exists(vto)) << "the octree was left behind: " << extra.back();
+    }
+    EXPECT_EQ(runVtex({"build", vtl.string(), "-o", vto.string(), "--source", glb.string()}).exitStatus, 0);
+    EXPECT_TRUE(fs::exists(vto));
+}
+
 }  // namespace
 }  // namespace vtex::test

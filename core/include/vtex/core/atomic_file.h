@@ -59,8 +59,9 @@ void commitAll(std::initializer_list<AtomicOutputFile*> files);
 /// file once links are followed — a directory, a FIFO, a device, a socket: the rename of an
 /// atomic output would replace it (as root, `-o /dev/null` would destroy /dev/null) — or that
 /// is the same file as one of `inputs` (`-o scene.toml` would replace the scene), a link to it
-/// included. A command calls it for each of its outputs, with every file it reads, before any
-/// work; AtomicOutputFile calls it again when created.
+/// included. A new path whose folder does not exist is refused too (vtex::IoError, "output
+/// directory does not exist"). A command calls it for each of its outputs, with every file it
+/// reads, before any work; AtomicOutputFile calls it again when created.
 ///
 /// A symbolic link to an unrelated regular file is an ordinary output, and the output replaces
 /// the link itself (rename(2) replaces the name it is given, as `mv` does): the file the link

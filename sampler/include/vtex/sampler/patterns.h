@@ -48,7 +48,18 @@ std::string patternsUsing(std::string_view option);
 /// Whether a pattern is tileable in x and y (grass and fur): sample it with `cyclic`.
 bool isCyclicPattern(std::string_view name);
 
-/// Generates a pattern. Throws std::invalid_argument for an unknown name or a bad option.
+/// The most triangles a pattern may have: what ingest accepts by default
+/// (ingest::IngestOptions::maxTriangles), so that `vtex sample` and a pipeline can read it.
+inline constexpr std::uint64_t kMaxPatternTriangles = 50'000'000;
+
+/// About how many triangles makePattern() would make: exact up to 64 elements, else those of 64
+/// elements scaled to the count (every pattern grows linearly with its count). Cheap. Throws
+/// like makePattern() for a bad option.
+std::uint64_t estimatePatternTriangles(std::string_view name, const PatternOptions& options);
+
+/// Generates a pattern. Throws std::invalid_argument for an unknown name, a bad option, or a
+/// count whose mesh would have more than kMaxPatternTriangles (`brushed --variant radial --count
+/// 2097152` asked for about 10⁹ triangles and grew past 6 GB; found by fuzz_cli.py).
 ingest::TriangleMesh makePattern(std::string_view name, const PatternOptions& options);
 
 /// Cuts `mesh` along the planes x = k and y = k (integers) and moves every piece into the unit
