@@ -4,11 +4,11 @@
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 #include <vtex/core/memory_budget.h>
+#include <vtex/render/image.h>
 
 #include <tbb/global_control.h>
 
 #include <algorithm>
-#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -118,11 +118,9 @@ ThreadLimit::ThreadLimit(int threads) {
 ThreadLimit::~ThreadLimit() = default;
 
 void checkImageExtension(const std::string& flag, const std::string& file, const std::vector<std::string>& formats) {
-    std::string extension = std::filesystem::path(file).extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    const std::string extension = std::filesystem::path(file).extension().string();
     if (file.empty() || extension.empty()) return;  // a name without one takes the first format
-    for (const std::string& f : formats)
-        if (extension == "." + f) return;
+    if (std::find(formats.begin(), formats.end(), render::imageFormat(file)) != formats.end()) return;
     std::string expected;
     for (const std::string& f : formats) expected += (expected.empty() ? "." : " or .") + f;
     throw CLI::ValidationError(flag, file + ": unknown image format '" + extension + "' (expected " + expected + ")");
