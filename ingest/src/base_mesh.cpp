@@ -24,16 +24,15 @@ using Polygon = std::vector<std::uint32_t>;
 // Two triangles that were one quad an exporter triangulated along its diagonal become that quad
 // again, if their normals are within kMaxFold of each other and their union is convex
 // (Blender's "Tris to Quads" takes the same 40° by default; a bilinear patch's two halves fold by
-// less on any mesh a texel would cover). First the pairs an exporter writes one after the other
-// as a fan, (v0, v1, v2) then (v0, v2, v3): the quad (v0, v1, v2, v3), in its own orientation, so
-// that texels keep their direction from cell to cell. Then any two triangles sharing an edge that
-// is the longest of both, wound consistently: the quad starting at its lowest vertex index. Other
-// triangles stay triangles.
-void mergeTrianglePairs(std::vector<Polygon>& polygons, const std::vector<Eigen::Vector3f>& positions) {
-    constexpr double kMaxFold = 40.0 * 3.14159265358979323846 / 180.0;
-    const auto at = [&](std::uint32_t v) { return positions[v].cast<double>(); };
+// less on any mesh a texel would cover).
+struct TrianglePairs {
+    static constexpr double kMaxFold = 40.0 * 3.14159265358979323846 / 180.0;
+    const std::vector<Eigen::Vector3f>& positions;
+
+    Eigen::Vector3d at(std::uint32_t v) const { return positions[v].cast<double>(); }
+
     // quad = (a, d, b, c) of triangles a→b→c and b→a→d: planar enough and convex.
-    const auto mergeable = [&](const Polygon& quad) {
+    bool mergeable(const Polygon& quad) const {
         const std::uint32_t a = quad[0], d = quad[1], b = quad[2], c = quad[3];
         const Eigen::Vector3d n1 = (at(b) - at(a)).cross(at(c) - at(a)), n2 = (at(a) - at(b)).cross(at(d) - at(b));
         if (!(n1.norm() > 0) || !(n2.norm() > 0)) return false;
@@ -44,63 +43,82 @@ void mergeTrianglePairs(std::vector<Polygon>& polygons, const std::vector<Eigen:
             if (!((q - p).cross(r - q).dot(n1 + n2) > 0)) return false;
         }
         return true;
-    };
-    std::vector<Polygon> fans;
-    for (std::size_t i = 0; i < polygons.size(); ++i) {
-        const Polygon& t = polygons[i];
-        if (i + 1 < polygons.size() && t.size() == 3 && polygons[i + 1].size() == 3) {
-            const Polygon& u = polygons[i + 1];
-            // t = v0→v1→v2, u = v0→v2→v3: the shared diagonal v0–v2; as (a, d, b, c): a = v2, b = v0.
-            if (u[0] == t[0] && u[1] == t[2] && u[2] != t[1] && mergeable({t[2], u[2], t[0], t[1]})) {
-                fans.push_back({t[0], t[1], t[2], u[2]});
-                ++i;
-                continue;
-            }
-        }
-        fans.push_back(t);
     }
-    polygons = std::move(fans);
-    // Each triangle's longest edge, as (from, to) in its winding.
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> longest;
-    const auto longestEdge = [&](const Polygon& t) {
+
+    // The longest edge of triangle t, as (from, to) in its winding.
+    std::pair<std::uint32_t, std::uint32_t> longestEdge(const Polygon& t) const {
         int best = 0;
         double length = -1;
         for (int k = 0; k < 3; ++k) {
             const double l = (at(t[std::size_t((k + 1) % 3)]) - at(t[std::size_t(k)])).squaredNorm();
-            if (l > length) { length = l; best = k; }
-        }
-        return std::pair(t[std::size_t(best)], t[std::size_t((best + 1) % 3)]);
-    };
-    for (std::size_t i = 0; i < polygons.size(); ++i)
-        if (polygons[i].size() == 3) longest.emplace(longestEdge(polygons[i]), i);
-    std::vector<char> merged(polygons.size(), 0);
-    std::vector<Polygon> out;
-    for (std::size_t i = 0; i < polygons.size(); ++i) {
-        if (merged[i]) continue;
-        const Polygon& t = polygons[i];
-        if (t.size() != 3) { out.push_back(t); continue; }
-        const auto [a, b] = longestEdge(t);
-        const auto partner = longest.find({b, a});
-        if (partner != longest.end() && partner->second != i && !merged[partner->second]) {
-            const Polygon& u = polygons[partner->second];
-            const auto apex = [](const Polygon& p, std::uint32_t x, std::uint32_t y) {
-                for (auto v : p) if (v != x && v != y) return v;
-                return x;
-            };
-            const std::uint32_t c = apex(t, a, b), d = apex(u, a, b);
-            const Polygon quad{a, d, b, c};  // t = a→b→c and u = b→a→d, both counter-clockwise
-            if (mergeable(quad)) {
-                const auto first = std::min_element(quad.begin(), quad.end()) - quad.begin();
-                Polygon rotated(4);
-                for (int k = 0; k < 4; ++k) rotated[std::size_t(k)] = quad[std::size_t((first + k) % 4)];
-                out.push_back(rotated);
-                merged[i] = merged[partner->second] = 1;
-                continue;
+            if (l > length) {
+                length = l;
+                best = k;
             }
         }
-        out.push_back(t);
+        return {t[std::size_t(best)], t[std::size_t((best + 1) % 3)]};
     }
-    polygons = std::move(out);
+
+    // The pairs an exporter writes one after the other as a fan, (v0, v1, v2) then (v0, v2, v3):
+    // the quad (v0, v1, v2, v3), in its own orientation, so that texels keep their direction
+    // from cell to cell.
+    void mergeFans(std::vector<Polygon>& polygons) const {
+        std::vector<Polygon> out;
+        for (std::size_t i = 0; i < polygons.size(); ++i) {
+            const Polygon& t = polygons[i];
+            if (i + 1 < polygons.size() && t.size() == 3 && polygons[i + 1].size() == 3) {
+                const Polygon& u = polygons[i + 1];
+                // The shared diagonal v0–v2; as (a, d, b, c): a = v2, b = v0.
+                if (u[0] == t[0] && u[1] == t[2] && u[2] != t[1] && mergeable({t[2], u[2], t[0], t[1]})) {
+                    out.push_back({t[0], t[1], t[2], u[2]});
+                    ++i;
+                    continue;
+                }
+            }
+            out.push_back(t);
+        }
+        polygons = std::move(out);
+    }
+
+    // Any two triangles sharing an edge that is the longest of both, wound consistently: the quad
+    // starting at its lowest vertex index. A triangle pairs only with a later one (an earlier one
+    // had its turn).
+    void mergeLongestEdges(std::vector<Polygon>& polygons) const {
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> edge(polygons.size());
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> byEdge;
+        for (std::size_t i = 0; i < polygons.size(); ++i)
+            if (polygons[i].size() == 3) byEdge.emplace(edge[i] = longestEdge(polygons[i]), i);
+        std::vector<char> merged(polygons.size(), 0);
+        std::vector<Polygon> out;
+        for (std::size_t i = 0; i < polygons.size(); ++i) {
+            if (merged[i]) continue;
+            const Polygon& t = polygons[i];
+            const auto partner = t.size() == 3 ? byEdge.find({edge[i].second, edge[i].first}) : byEdge.end();
+            if (partner != byEdge.end() && partner->second > i) {
+                const auto [a, b] = edge[i];
+                // The corner off the edge (a degenerate triangle has none: a, which mergeable refuses).
+                const auto apex = [a = a, b = b](const Polygon& p) {
+                    const auto v = std::find_if(p.begin(), p.end(), [&](std::uint32_t w) { return w != a && w != b; });
+                    return v == p.end() ? a : *v;
+                };
+                Polygon quad{a, apex(polygons[partner->second]), b, apex(t)};  // t = a→b→c, its partner b→a→d
+                if (mergeable(quad)) {
+                    std::rotate(quad.begin(), std::min_element(quad.begin(), quad.end()), quad.end());
+                    out.push_back(std::move(quad));
+                    merged[partner->second] = 1;
+                    continue;
+                }
+            }
+            out.push_back(t);
+        }
+        polygons = std::move(out);
+    }
+};
+
+void mergeTrianglePairs(std::vector<Polygon>& polygons, const std::vector<Eigen::Vector3f>& positions) {
+    const TrianglePairs pairs{positions};
+    pairs.mergeFans(polygons);
+    pairs.mergeLongestEdges(polygons);
 }
 
 }  // namespace
