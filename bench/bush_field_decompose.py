@@ -1,0 +1,77 @@
+#!/usr/bin/env python3
+"""Where the bush field's bias is: each view's image split into what the ground and the leaves
+contribute (docs/error-vs-time.md, "Levels fitted to the source").
+
+For each of far.toml and mid.toml in DIR (written by bench/bush_field.sh, with its bush.vto and
+bush.glb) three variants are made beside it:
+  *_gcov  ground seen: no light, leaves black, the ground's ambient 1 (the fraction of ground the
+          bushes let through);
+  *_bl    lit ground: the leaves' diffuse 0 (black leaves);
+  *_bg    lit leaves: the ground's diffuse 0.
+Each variant's truth is `vtex reference --spp SPP` (cached as DIR/truth_VARIANT.exr, reused when
+present), the image and each variant are rendered with `vtex render ARGS...`, and one markdown row
+per view gives the bias (row mean / truth mean − 1) of R/G/B for the image, and of G for the three
+variants, and the image's RMSE against DIR/truth_VIEW.exr (bush_field.sh's truth).
+
+Usage: bench/bush_field_decompose.py VTEX DIR [SPP] [-- RENDER ARGS...]
+  e.g. bench/bush_field_decompose.py build/apps/vtex/vtex /tmp/bfbench 256 -- --level-fit off
+"""
+import json
+import os
+import re
+import subprocess
+import sys
+
+LEAVES = 'material = { diffuse = [1, 1, 1], specular = [0, 0, 0], ambient = [0, 0, 0] }'
+GROUND = 'material  = { diffuse = [0.35, 0.28, 0.2], specular = [0, 0, 0], ambient = [0, 0, 0] }'
+
+
+def variant(text, name):
+    if name == 'gcov':
+        text = re.sub(r'\[\[light\]\]\n(.*\n){3}', '', text)
+        text = text.replace(LEAVES, LEAVES.replace('diffuse = [1, 1, 1]', 'diffuse = [0, 0, 0]'))
+        return text.replace(GROUND, 'material  = { diffuse = [0, 0, 0], specular = [0, 0, 0], ambient = [1, 1, 1] }')
+    if name == 'bl':
+        return text.replace(LEAVES, LEAVES.replace('diffuse = [1, 1, 1]', 'diffuse = [0, 0, 0]'))
+    return text.replace(GROUND, GROUND.replace('diffuse = [0.35, 0.28, 0.2]', 'diffuse = [0, 0, 0]'))
+
+
+def compare(vtex, a, b):
+    out = subprocess.run([vtex, 'compare', a, b, '--json'], check=True, capture_output=True, text=True).stdout
+    return json.loads(out)
+
+
+def main():
+    args = sys.argv[1:]
+    extra = []
+    if '--' in args:
+        extra = args[args.index('--') + 1:]
+        args = args[:args.index('--')]
+    if len(args) < 2:
+        sys.exit(__doc__)
+    vtex, folder = os.path.abspath(args[0]), args[1]
+    spp = args[2] if len(args) > 2 else '256'
+    os.chdir(folder)
+    print('| view | image R / G / B % | ground seen / lit ground / lit leaves (G) % | image RMSE |')
+    print('| --- | --- | --- | ---: |')
+    for view in ('far', 'mid'):
+        with open(view + '.toml') as f:
+            text = f.read()
+        biases = []
+        for name in ('gcov', 'bl', 'bg'):
+            scene = '%s_%s.toml' % (view, name)
+            with open(scene, 'w') as f:
+                f.write(variant(text, name))
+            truth = 'truth_%s_%s.exr' % (view, name)
+            if not os.path.exists(truth):
+                subprocess.run([vtex, 'reference', scene, '-o', truth, '--spp', spp, '-q'], check=True)
+            subprocess.run([vtex, 'render', scene, '-o', 'decompose.exr', '-q'] + extra, check=True)
+            biases.append(100 * compare(vtex, 'decompose.exr', truth)['bias'][1])
+        subprocess.run([vtex, 'render', view + '.toml', '-o', 'decompose.exr', '-q'] + extra, check=True)
+        image = compare(vtex, 'decompose.exr', 'truth_%s.exr' % view)
+        print('| %s | %s | %s | %.5f |' % (view, ' / '.join('%+.1f' % (100 * b) for b in image['bias']),
+                                           ' / '.join('%+.1f' % b for b in biases), image['rmse']))
+
+
+if __name__ == '__main__':
+    main()
