@@ -65,13 +65,13 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         std::optional<ingest::TriangleMesh> source;
         if (!flags->source.empty()) source = ingest::loadMesh(flags->source);
         const auto start = std::chrono::steady_clock::now();
-        const octree::SparseVolume volume = octree::readVtl(flags->input);
+        octree::SparseVolume volume = octree::readVtl(flags->input);
         octree::BuildOptions options;
         options.rule = *octree::parseFilterRule(flags->filter);
         options.tolerance = flags->tolerance;
         options.filterErrorSamples = flags->filterErrorSamples;
         TerminalProgress progress(global);
-        const octree::Octree tree = octree::buildOctree(volume, options, progress);
+        const octree::Octree tree = octree::buildOctree(std::move(volume), options, progress);
         octree::writeVto(tree, flags->output);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         char line[512];

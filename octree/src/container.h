@@ -26,11 +26,16 @@ static_assert(std::endian::native == std::endian::little || std::endian::native 
 class ByteWriter {
 public:
     void u8(std::uint8_t v) { mBytes.push_back(char(v)); }
+    // Little-endian whatever the host, appended as one run (a node is eleven of these).
     void u32(std::uint32_t v) {
-        for (int i = 0; i < 4; ++i) mBytes.push_back(char((v >> (8 * i)) & 0xFF));
+        char b[4];
+        for (int i = 0; i < 4; ++i) b[i] = char((v >> (8 * i)) & 0xFF);
+        mBytes.append(b, 4);
     }
     void u64(std::uint64_t v) {
-        for (int i = 0; i < 8; ++i) mBytes.push_back(char((v >> (8 * i)) & 0xFF));
+        char b[8];
+        for (int i = 0; i < 8; ++i) b[i] = char((v >> (8 * i)) & 0xFF);
+        mBytes.append(b, 8);
     }
     void f32(float v) { u32(std::bit_cast<std::uint32_t>(v)); }
     void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }

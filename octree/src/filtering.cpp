@@ -3,6 +3,7 @@
 // and the SGGX alternative (Heitz et al. 2015, §5: linear filtering of S).
 #include <vtex/octree/filtering.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -25,15 +26,23 @@ bool usableWeight(double w) { return w > 0 && std::isfinite(w); }
 std::optional<Ellipsoid> filterEllipsoids(std::span<const Ellipsoid> children,
                                           std::span<const double> weights, FilterRule rule) {
     checkSizes(children.size(), weights.size());
+    // Each child enters with unit mean apparent area, so its weight is its density alone.
+    std::vector<Mat3> forms(children.size(), Mat3::Zero());
+    for (std::size_t i = 0; i < children.size(); ++i)
+        if (usableWeight(weights[i]))
+            forms[i] = rule == FilterRule::Neyret ? children[i].normalized(Normalization::ThreeAxis).M()
+                                                  : children[i].normalized(Normalization::Exact).S();
+    return filterForms(forms, weights, rule);
+}
+
+std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<const double> weights,
+                                     FilterRule rule) {
+    checkSizes(forms.size(), weights.size());
     Mat3 sum = Mat3::Zero();
     double totalWeight = 0;
-    for (std::size_t i = 0; i < children.size(); ++i) {
+    for (std::size_t i = 0; i < forms.size(); ++i) {
         if (!usableWeight(weights[i])) continue;
-        // Each child enters with unit mean apparent area, so its weight is its density alone.
-        if (rule == FilterRule::Neyret)
-            sum += weights[i] * children[i].normalized(Normalization::ThreeAxis).M();
-        else
-            sum += weights[i] * children[i].normalized(Normalization::Exact).S();
+        sum += weights[i] * forms[i];
         totalWeight += weights[i];
     }
     if (!(totalWeight > 0)) return std::nullopt;
@@ -41,6 +50,19 @@ std::optional<Ellipsoid> filterEllipsoids(std::span<const Ellipsoid> children,
     const auto result = rule == FilterRule::Neyret ? Ellipsoid::fromM(sum) : Ellipsoid::fromS(sum);
     if (!result) return std::nullopt;
     return result->normalized(Normalization::Exact);
+}
+
+std::optional<Mat3> storedFilterForm(const VoxelData& voxel, FilterRule rule) {
+    const Vec3 sigma(voxel.sigma[0], voxel.sigma[1], voxel.sigma[2]);
+    if (voxel.isEmpty() || !(sigma.maxCoeff() > 0)) return std::nullopt;
+    // A stored primitive is normalised (Exact) before its σ is rounded to float, so its S is
+    // the normalised one to float precision: no elliptic integral, no eigensolver (R and σ are
+    // its eigen-form already). ThreeAxis: Ā₃ = π(a₂a₃ + a₁a₃ + a₁a₂)/3 of the same semi-axes.
+    if (rule == FilterRule::Sggx) return unpackS(voxel);
+    const Vec3 a = semiAxesFromSigma(sigma);
+    const double threeAxisArea = std::numbers::pi * (a[1] * a[2] + a[0] * a[2] + a[0] * a[1]) / 3;
+    const Mat3 R = unpackRotation(voxel);
+    return R * (a.cwiseAbs2() / threeAxisArea).asDiagonal() * R.transpose();
 }
 
 std::span<const Vec3> sphericalPointSet(std::size_t count) {
@@ -70,16 +92,29 @@ double filterError(const Ellipsoid& result, std::span<const Ellipsoid> children,
     for (double w : weights)
         if (usableWeight(w)) totalWeight += w;
     if (!(totalWeight > 0) || points.empty()) return 0;
+    // The directions as three arrays, the mixture and the result's f̂ accumulated child by
+    // child over all of them (vectorised), then the squared differences summed in order.
+    const std::size_t n = points.size();
+    thread_local std::vector<double> buffer;  // one per thread, reused: this runs per sampled node
+    buffer.resize(5 * n);
+    const std::span<double> all(buffer);
+    std::fill(buffer.begin() + 3 * std::ptrdiff_t(n), buffer.end(), 0.0);
+    const auto x = all.subspan(0, n), y = all.subspan(n, n), z = all.subspan(2 * n, n);
+    const auto mixture = all.subspan(3 * n, n), own = all.subspan(4 * n, n);
+    for (std::size_t p = 0; p < n; ++p) {
+        x[p] = points[p].x();
+        y[p] = points[p].y();
+        z[p] = points[p].z();
+    }
+    for (std::size_t i = 0; i < children.size(); ++i)
+        if (usableWeight(weights[i])) children[i].accumulateNormalizedNormalDistribution(x, y, z, weights[i], mixture);
+    result.accumulateNormalizedNormalDistribution(x, y, z, 1.0, own);
     double squaredSum = 0;
-    for (const Vec3& p : points) {
-        double mixture = 0;
-        for (std::size_t i = 0; i < children.size(); ++i)
-            if (usableWeight(weights[i]))
-                mixture += weights[i] * children[i].normalizedNormalDistribution(p);
-        const double difference = result.normalizedNormalDistribution(p) - mixture / totalWeight;
+    for (std::size_t p = 0; p < n; ++p) {
+        const double difference = own[p] - mixture[p] / totalWeight;
         squaredSum += difference * difference;
     }
-    return std::sqrt(squaredSum * 4 * std::numbers::pi / double(points.size()));
+    return std::sqrt(squaredSum * 4 * std::numbers::pi / double(n));
 }
 
 double fitError(const Ellipsoid& fit, std::span<const Vec3> normals, std::span<const double> weights,

@@ -71,14 +71,16 @@ LevelBox boxAtLevel(const VoxelBox& box, std::uint32_t shift) {
 
 struct Filtered {
     VoxelData data;
-    std::vector<Ellipsoid> ellipsoids;
+    std::vector<Mat3> forms;  // what the rule averages, per child with an ellipsoid
     std::vector<double> weights;
     std::optional<Ellipsoid> result;
 };
 
-// The design's filter for one parent from its (1 to 8) non-empty children.
+// The design's filter for one parent from its (1 to 8) non-empty children. The children are
+// read through storedFilterForm, not rebuilt as Ellipsoids: this runs once per node of the
+// pyramid and was the build's cost (an eigensolver and elliptic integrals per child).
 void filterChildren(const PNode* children, std::size_t count, FilterRule rule, Filtered& out) {
-    out.ellipsoids.clear();
+    out.forms.clear();
     out.weights.clear();
     out.result.reset();
     // Eight identical children: the mean is the child itself, bit for bit (so that tolerance 0
@@ -98,17 +100,32 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, F
         const double w = d.density;
         mass += w;
         for (int c = 0; c < 3; ++c) albedo[c] += w * d.albedo[c];
-        if (auto e = unpackEllipsoid(d)) {
-            out.ellipsoids.push_back(*e);
+        if (auto form = storedFilterForm(d, rule)) {
+            out.forms.push_back(*form);
             out.weights.push_back(w);
         }
     }
     VoxelData& p = out.data;
     p.density = float(mass / 8.0);
     for (int c = 0; c < 3; ++c) p.albedo[c] = mass > 0 ? float(albedo[c] / mass) : 0.0f;
-    if (!out.ellipsoids.empty()) out.result = filterEllipsoids(out.ellipsoids, out.weights, rule);
+    if (!out.forms.empty()) out.result = filterForms(out.forms, out.weights, rule);
     if (out.result) packEllipsoid(*out.result, p);
     else packIsotropic(p);
+}
+
+// The filter error of one parent (filterError: its NDF against the mixture of its children's),
+// with the children rebuilt as Ellipsoids; for the sampled nodes only.
+double measureFilterError(const PNode* children, std::size_t count, FilterRule rule, Filtered& f) {
+    filterChildren(children, count, rule, f);
+    if (!f.result) return 0;
+    std::vector<Ellipsoid> ellipsoids;
+    std::vector<double> weights;
+    for (std::size_t i = 0; i < count; ++i)
+        if (auto e = unpackEllipsoid(children[i].data)) {
+            ellipsoids.push_back(*e);
+            weights.push_back(children[i].data.density);
+        }
+    return filterError(*f.result, ellipsoids, weights);
 }
 
 // Indices where a new parent starts in a sorted child level, restricted to `keep(parentKey)`.
@@ -208,10 +225,8 @@ struct OctreeBuilder::Impl {
                                       PNode& node = level[selected[s]];
                                       if (!std::isnan(node.filterError)) continue;
                                       const auto [b, e] = childRange(l, node.key);
-                                      filterChildren(&levels[l + 1][b], e - b, options.rule, f);
-                                      double error = 0;
-                                      if (f.result) error = filterError(*f.result, f.ellipsoids, f.weights);
-                                      node.filterError = float(error);
+                                      node.filterError =
+                                          float(measureFilterError(&levels[l + 1][b], e - b, options.rule, f));
                                   }
                               });
             double sum = 0, max = 0;
@@ -477,8 +492,8 @@ Octree OctreeBuilder::compress(Progress& progress) const {
     return tree;
 }
 
-Octree buildOctree(const SparseVolume& volume, const BuildOptions& options, Progress& progress) {
-    OctreeBuilder builder(volume, options, progress);
+Octree buildOctree(SparseVolume volume, const BuildOptions& options, Progress& progress) {
+    OctreeBuilder builder(std::move(volume), options, progress);
     return builder.compress(progress);
 }
 

@@ -50,10 +50,14 @@ void packEllipsoid(const Ellipsoid& ellipsoid, VoxelData& voxel) {
     voxel.sigma = {float(kPi * a[1] * a[2]), float(kPi * a[0] * a[2]), float(kPi * a[0] * a[1])};
 }
 
-Mat3 unpackS(const VoxelData& voxel) {
+Mat3 unpackRotation(const VoxelData& voxel) {
     Eigen::Quaterniond q(voxel.rotation[3], voxel.rotation[0], voxel.rotation[1], voxel.rotation[2]);
     if (q.norm() == 0) return Mat3::Zero();
-    const Mat3 R = q.normalized().toRotationMatrix();
+    return q.normalized().toRotationMatrix();
+}
+
+Mat3 unpackS(const VoxelData& voxel) {
+    const Mat3 R = unpackRotation(voxel);
     const Vec3 s2(double(voxel.sigma[0]) * voxel.sigma[0], double(voxel.sigma[1]) * voxel.sigma[1],
                   double(voxel.sigma[2]) * voxel.sigma[2]);
     return R * s2.asDiagonal() * R.transpose();

@@ -308,12 +308,12 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             const fs::path sourceFile = stages[stages[sampleStage].inputs[0]].outputs.at("mesh");
             const fs::path volumeFile = stages[sampleStage].outputs.at("volume");
             const auto held = budget.reserve(volumeFile, "building its octree", octree::estimateBuildMemory(volumeFile));
-            const octree::SparseVolume volume = octree::readVtl(volumeFile);
+            octree::SparseVolume volume = octree::readVtl(volumeFile);
             octree::BuildOptions o;
             o.rule = *octree::parseFilterRule(step.filter);
             o.tolerance = step.tolerance;
             NullProgress quiet;
-            const octree::Octree tree = octree::buildOctree(volume, o, quiet);
+            const octree::Octree tree = octree::buildOctree(std::move(volume), o, quiet);
             octree::writeVto(tree, self.outputs.at("octree"));
             // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
             const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, ingest::loadMesh(sourceFile));

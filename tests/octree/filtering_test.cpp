@@ -162,6 +162,45 @@ TEST(Filtering, CrossedFibresNeyretCollapsesToADiscSggxKeepsAreaInTheirPlane) {
     EXPECT_NEAR(sggxError, 1.24, 0.01);
 }
 
+// The octree build reads each child through storedFilterForm (no Ellipsoid, no elliptic
+// integral) where filterEllipsoids rebuilds it: packed children of every standard shape, at
+// random sizes and orientations, give the same parent within float rounding of the stored σ.
+TEST(Filtering, StoredFormsGiveTheParentTheEllipsoidsGive) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> weight(0.01, 10), logScale(-3, 3);
+    std::vector<Ellipsoid> shapes;
+    for (const auto& [name, e] : standardShapes()) shapes.push_back(e);
+    std::uniform_int_distribution<std::size_t> pick(0, shapes.size() - 1), count(1, 8);
+    for (int trial = 0; trial < 400; ++trial) {
+        std::vector<VoxelData> voxels(count(rng));
+        std::vector<Ellipsoid> children;
+        std::vector<Mat3> formsN, formsS;
+        std::vector<double> weights;
+        for (VoxelData& v : voxels) {
+            const Ellipsoid e = Ellipsoid::fromAxes(randomRotation(rng) * shapes[pick(rng)].basis(),
+                                                    shapes[pick(rng)].semiAxes() * std::exp(logScale(rng)));
+            v.density = float(weight(rng));
+            packEllipsoid(e, v);
+            const auto unpacked = unpackEllipsoid(v);
+            ASSERT_TRUE(unpacked);
+            // What storedFilterForm takes as exact: the stored primitive has unit mean area.
+            ASSERT_NEAR(unpacked->meanProjectedArea(), 1.0, 1e-6);
+            children.push_back(*unpacked);
+            formsN.push_back(*storedFilterForm(v, FilterRule::Neyret));
+            formsS.push_back(*storedFilterForm(v, FilterRule::Sggx));
+            weights.push_back(v.density);
+        }
+        for (FilterRule rule : kRules) {
+            const auto reference = filterEllipsoids(children, weights, rule);
+            const auto stored = filterForms(rule == FilterRule::Neyret ? formsN : formsS, weights, rule);
+            ASSERT_TRUE(reference && stored);
+            EXPECT_TRUE(stored->S().isApprox(reference->S(), 1e-6)) << ruleName(rule) << " trial " << trial;
+        }
+    }
+    VoxelData empty;
+    EXPECT_FALSE(storedFilterForm(empty, FilterRule::Sggx));
+}
+
 TEST(Filtering, SphericalPointSetIsUnitAndBalanced) {
     const auto points = sphericalPointSet(512);
     ASSERT_EQ(points.size(), 512u);

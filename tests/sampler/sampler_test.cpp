@@ -2,6 +2,7 @@
 #include "meshes.h"
 
 #include <vtex/core/memory_budget.h>
+#include <vtex/octree/filtering.h>
 #include <vtex/octree/octree.h>
 #include <vtex/sampler/clip.h>
 #include <vtex/sampler/patterns.h>
@@ -9,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -143,6 +145,43 @@ TEST(Sampler, AreaIsConservedForEveryPattern) {
         const auto volume = sample(mesh, optionsFor(32, isCyclicPattern(name)));
         const double area = meshArea(mesh);
         EXPECT_NEAR(sampledArea(volume), area, 1e-4 * area) << name;
+    }
+}
+
+// The build reads children through their stored eigen-form (octree::storedFilterForm) taking
+// their normalisation as exact; on the bush's own voxels every stored parent still equals the
+// filter of its stored children rebuilt as Ellipsoids, within the float rounding of σ.
+TEST(Sampler, BushParentsAreTheFilterOfTheirChildrenRebuiltAsEllipsoids) {
+    PatternOptions po;
+    const auto volume = sample(makePattern("bush", po), optionsFor(64));
+    for (octree::FilterRule rule : {octree::FilterRule::Sggx, octree::FilterRule::Neyret}) {
+        octree::BuildOptions bo;
+        bo.rule = rule;
+        NullProgress progress;
+        const octree::Octree tree = octree::buildOctree(volume, bo, progress);
+        std::size_t checked = 0;
+        double worst = 0;
+        for (std::uint32_t l = 0; l + 1 < tree.levelCount(); ++l)
+            for (const auto& node : tree.levels[l]) {
+                if (node.childMask == 0) continue;
+                std::vector<octree::Ellipsoid> children;
+                std::vector<double> weights;
+                for (int c = 0; c < std::popcount(unsigned(node.childMask)); ++c) {
+                    const auto& child = tree.levels[l + 1][node.firstChild + std::size_t(c)].data;
+                    const auto e = octree::unpackEllipsoid(child);
+                    ASSERT_TRUE(e);
+                    EXPECT_NEAR(e->meanProjectedArea(), 1.0, 1e-6);
+                    children.push_back(*e);
+                    weights.push_back(child.density);
+                }
+                const auto reference = octree::filterEllipsoids(children, weights, rule);
+                ASSERT_TRUE(reference);
+                const octree::Mat3 expected = reference->S(), stored = octree::unpackS(node.data);
+                worst = std::max(worst, (stored - expected).norm() / expected.norm());
+                ++checked;
+            }
+        EXPECT_GT(checked, 1000u);
+        EXPECT_LT(worst, 1e-5) << (rule == octree::FilterRule::Sggx ? "sggx" : "neyret");
     }
 }
 

@@ -39,6 +39,11 @@ inline constexpr double kMinAxisRatio = 1e-4;
 /// inverse semi-axes, so the resulting axis ratio is floored at kMinAxisRatio in every case.
 Vec3 floorAxisRatios(const Vec3& lengths);
 
+/// The semi-axes of the ellipsoid whose projected areas along its axes are `sigma` (σᵢ = π aⱼaₖ;
+/// ≥ 0 with a positive maximum), after the ratio floor: what fromS and fitNormals build from
+/// their σ, and what a stored voxel's σ stands for.
+Vec3 semiAxesFromSigma(const Vec3& sigma);
+
 /// How an ellipsoid is scaled to unit mean apparent area Ā (DESIGN.md, "Normalisation").
 enum class Normalization {
     Exact,     ///< Ā = surface area / 4 (Cauchy), the mean of A(ω) over all directions
@@ -120,6 +125,13 @@ public:
     double normalizedNormalDistribution(const Vec3& normal) const {
         return normalDistribution(normal) / mExactMeanArea;
     }
+
+    /// Adds `weight`·f(N)/Ā (normalizedNormalDistribution) to `sums[i]` for each direction
+    /// N = (x[i], y[i], z[i]): the same arithmetic, in a loop the compiler vectorises (the
+    /// filter error evaluates eight children on 512 directions per sampled node).
+    void accumulateNormalizedNormalDistribution(std::span<const double> x, std::span<const double> y,
+                                                std::span<const double> z, double weight,
+                                                std::span<double> sums) const;
 
     /// A copy with every length multiplied by `factor` (> 0): areas scale by factor².
     Ellipsoid scaled(double factor) const;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <vtex/octree/ellipsoid.h>
+#include <vtex/octree/voxel.h>
 
 #include <optional>
 #include <span>
@@ -28,6 +29,19 @@ enum class FilterRule {
 /// total weight is zero. Sizes must match.
 std::optional<Ellipsoid> filterEllipsoids(std::span<const Ellipsoid> children,
                                           std::span<const double> weights, FilterRule rule);
+
+/// The same rule on the children's matrices: `forms[i]` is child i's S normalised to unit
+/// exact mean area (Sggx) or its M normalised by the three-axis mean area (Neyret), as
+/// filterEllipsoids forms them or storedFilterForm reads them from a voxel.
+std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<const double> weights,
+                                     FilterRule rule);
+
+/// The matrix `rule` averages for a stored voxel, read from its eigen-form (R, σ) without
+/// rebuilding its Ellipsoid: the octree build's per-child cost. For Sggx it takes the stored
+/// normalisation as exact: packEllipsoid normalises before rounding σ to float, so the
+/// unpacked primitive's exact mean area is 1 within float rounding (OctreeFilter tests bound
+/// it at 1e-6 on sampled voxels). Empty for an empty voxel or a zero σ.
+std::optional<Mat3> storedFilterForm(const VoxelData& voxel, FilterRule rule);
 
 /// A fixed, deterministic set of unit directions spread evenly over the sphere (a spherical
 /// Fibonacci lattice), each standing for 4π/size() steradians.

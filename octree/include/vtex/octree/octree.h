@@ -130,8 +130,9 @@ private:
     std::unique_ptr<Impl> mImpl;
 };
 
-/// OctreeBuilder(volume).compress() in one call.
-Octree buildOctree(const SparseVolume& volume, const BuildOptions& options, Progress& progress);
+/// OctreeBuilder(volume).compress() in one call. Pass the volume by std::move when it is not
+/// needed afterwards: the builder keeps it, and a copy of a 1024³ volume is half a gigabyte.
+Octree buildOctree(SparseVolume volume, const BuildOptions& options, Progress& progress);
 
 /// An upper estimate of the peak memory (bytes) of reading the .vtl `file` and building its
 /// octree, from the file's size alone, before it is read: 12× the file plus 32 MiB (the parsed

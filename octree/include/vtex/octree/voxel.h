@@ -50,6 +50,8 @@ void packEllipsoid(const Ellipsoid& ellipsoid, VoxelData& voxel);
 std::optional<Ellipsoid> unpackEllipsoid(const VoxelData& voxel);
 /// The SGGX matrix S = R diag(σ²) Rᵀ a voxel stores (double precision).
 Mat3 unpackS(const VoxelData& voxel);
+/// The rotation R a voxel stores (its quaternion normalised; zero for a zero quaternion).
+Mat3 unpackRotation(const VoxelData& voxel);
 /// Stores the isotropic primitive (a sphere, S = identity).
 void packIsotropic(VoxelData& voxel);
 
