@@ -1,6 +1,7 @@
 // The sectioned, checksummed container of .vtl and .vto files (docs/formats.md).
 #include "container.h"
 
+#include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 #include <vtex/core/input_file.h>
 #include <vtex/octree/volume.h>
@@ -36,8 +37,7 @@ std::uint64_t tableChecksum(std::string_view bytes, std::size_t tableEnd) {
     return checksum(guarded);
 }
 
-std::string writeContainer(std::string_view magic, std::uint32_t version,
-                           const std::vector<OutSection>& sections) {
+std::string containerHeader(std::string_view magic, std::uint32_t version, const std::vector<OutSection>& sections) {
     ByteWriter header;
     header.bytes(magic);
     header.u32(version);
@@ -55,9 +55,27 @@ std::string writeContainer(std::string_view magic, std::uint32_t version,
     std::string& bytes = header.str();
     const std::uint64_t guard = tableChecksum(bytes, bytes.size());
     for (int i = 0; i < 8; ++i) bytes[16 + i] = char((guard >> (8 * i)) & 0xFF);
-    bytes.reserve(offset);
+    return std::move(bytes);
+}
+
+std::string writeContainer(std::string_view magic, std::uint32_t version,
+                           const std::vector<OutSection>& sections) {
+    std::string bytes = containerHeader(magic, version, sections);
+    std::size_t size = bytes.size();
+    for (const auto& section : sections) size += section.payload.size();
+    bytes.reserve(size);
     for (const auto& section : sections) bytes += section.payload;
     return bytes;
+}
+
+void writeContainerFile(const std::filesystem::path& file, std::string_view magic, std::uint32_t version,
+                        const std::vector<OutSection>& sections) {
+    AtomicOutputFile out(file);
+    const std::string header = containerHeader(magic, version, sections);
+    out.stream().write(header.data(), std::streamsize(header.size()));
+    for (const auto& section : sections)
+        out.stream().write(section.payload.data(), std::streamsize(section.payload.size()));
+    out.commit();
 }
 
 namespace {

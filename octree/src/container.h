@@ -105,8 +105,15 @@ std::uint64_t checksum(std::string_view bytes);
 /// `tableEnd`.
 std::uint64_t tableChecksum(std::string_view bytes, std::size_t tableEnd);
 
+/// The header and section table of a container holding `sections`, in that order.
+std::string containerHeader(std::string_view magic, std::uint32_t version, const std::vector<OutSection>& sections);
+/// The whole container as bytes.
 std::string writeContainer(std::string_view magic, std::uint32_t version,
                            const std::vector<OutSection>& sections);
+/// The same bytes written to `file` atomically (core/atomic_file.h), the sections streamed from
+/// where they are rather than first joined into one more copy of the whole file.
+void writeContainerFile(const std::filesystem::path& file, std::string_view magic, std::uint32_t version,
+                        const std::vector<OutSection>& sections);
 
 /// Checks magic, version, table and every section checksum; throws vtex::InputError naming
 /// `kind` and the failing section.
@@ -121,7 +128,11 @@ std::string_view requireSection(const std::vector<InSection>& sections, std::str
 std::string sectionLocation(std::string_view tag);
 
 /// The 44-byte voxel record: density, rotation (4), sigma (3), albedo (3), all f32.
+inline constexpr std::size_t kVoxelRecordSize = 44;
 void writeVoxelData(ByteWriter& w, const VoxelData& d);
+/// The same record stored at `out` (kVoxelRecordSize bytes), for writers that fill a buffer
+/// from several threads.
+void storeVoxelData(char* out, const VoxelData& d);
 VoxelData readVoxelData(ByteReader& r);
 /// A problem with a parsed voxel (non-finite, negative, empty when not allowed), or empty.
 std::string checkVoxelData(const VoxelData& d, bool allowEmpty);

@@ -245,7 +245,7 @@ void Ellipsoid::accumulateNormalizedNormalDistribution(std::span<const double> x
     if (x.size() != n || y.size() != n || z.size() != n)
         throw std::invalid_argument("accumulateNormalizedNormalDistribution: one sum per direction");
     const double m0 = mM[0], m1 = mM[1], m2 = mM[2], m3 = mM[3], m4 = mM[4], m5 = mM[5];
-    const double det = mDetM, area = mExactMeanArea;
+    const double scale = weight * (mDetM / mExactMeanArea);  // one division per direction, not two
     const double* px = x.data();
     const double* py = y.data();
     const double* pz = z.data();
@@ -253,7 +253,7 @@ void Ellipsoid::accumulateNormalizedNormalDistribution(std::span<const double> x
     for (std::size_t i = 0; i < n; ++i) {
         const double a = px[i], b = py[i], c = pz[i];
         const double nMn = m0 * a * a + m1 * b * b + m2 * c * c + 2 * (m3 * a * b + m4 * a * c + m5 * b * c);
-        out[i] += weight * (det / (nMn * nMn) / area);
+        out[i] += scale / (nMn * nMn);
     }
 }
 

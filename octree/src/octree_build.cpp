@@ -400,7 +400,11 @@ Octree OctreeBuilder::compress(Progress& progress) const {
     std::vector<Range> below, current;
     collapsible[L].assign(m.levels[L].size(), 1);
     below.resize(m.levels[L].size());
-    for (std::size_t i = 0; i < m.levels[L].size(); ++i) below[i] = pointRange(m.levels[L][i].data);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.levels[L].size(), 4096),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t i = range.begin(); i != range.end(); ++i)
+                              below[i] = pointRange(m.levels[L][i].data);
+                      });
     for (std::uint32_t l = L; l-- > 0;) {
         const Level& level = m.levels[l];
         collapsible[l].assign(level.size(), 0);

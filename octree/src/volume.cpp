@@ -5,7 +5,12 @@
 #include <vtex/core/error.h>
 #include <vtex/octree/volume.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
+#include <bit>
 #include <cmath>
 
 namespace vtex::octree {
@@ -30,10 +35,20 @@ bool allFinite(const VoxelData& d) {
 namespace detail {
 
 void writeVoxelData(ByteWriter& w, const VoxelData& d) {
-    w.f32(d.density);
-    for (float v : d.rotation) w.f32(v);
-    for (float v : d.sigma) w.f32(v);
-    for (float v : d.albedo) w.f32(v);
+    char record[kVoxelRecordSize];
+    storeVoxelData(record, d);
+    w.bytes(std::string_view(record, kVoxelRecordSize));
+}
+
+void storeVoxelData(char* out, const VoxelData& d) {
+    const auto f32 = [&out](float v) {
+        const std::uint32_t bits = std::bit_cast<std::uint32_t>(v);
+        for (int i = 0; i < 4; ++i) *out++ = char((bits >> (8 * i)) & 0xFF);  // little-endian on any host
+    };
+    f32(d.density);
+    for (float v : d.rotation) f32(v);
+    for (float v : d.sigma) f32(v);
+    for (float v : d.albedo) f32(v);
 }
 
 VoxelData readVoxelData(ByteReader& r) {
@@ -153,24 +168,45 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
         throw InputError(file, "size does not match its block count " + std::to_string(count), where);
     volume.blocks.resize(count);
     const std::uint32_t L = volume.info.levels;
-    std::uint64_t nextFree = 0;  // first finest key not covered by the blocks so far
-    for (std::uint64_t i = 0; i < count; ++i) {
-        VolumeBlock& b = volume.blocks[i];
-        b.key = reader.u64();
-        b.level = reader.u8();
-        b.flags = reader.u8();
-        b.data = readVoxelData(reader);
-        const std::string blockWhere = where + ", block " + std::to_string(i);
-        if (b.level > L) throw InputError(file, "level deeper than the resolution", blockWhere);
-        if (b.flags > kBlockSolid) throw InputError(file, "unknown block flags", blockWhere);
-        if (b.level < L && !b.isSolid()) throw InputError(file, "coarse block that is not solid", blockWhere);
-        if (b.key >= (std::uint64_t(1) << (3 * b.level))) throw InputError(file, "key out of range", blockWhere);
-        if (const auto problem = checkVoxelData(b.data, false); !problem.empty())
-            throw InputError(file, problem, blockWhere);
-        const std::uint64_t first = volume.finestKey(b);
-        if (first < nextFree) throw InputError(file, "blocks out of order or overlapping", blockWhere);
-        nextFree = first + (std::uint64_t(1) << (3 * (L - b.level)));
-    }
+    const char* records = payload.data() + 8;
+    // A block's problem, or empty; blocks i − 1 and i must not overlap (keys strictly in order).
+    const auto problemAt = [&](std::uint64_t i) -> std::string {
+        const VolumeBlock& b = volume.blocks[i];
+        if (b.level > L) return "level deeper than the resolution";
+        if (b.flags > kBlockSolid) return "unknown block flags";
+        if (b.level < L && !b.isSolid()) return "coarse block that is not solid";
+        if (b.key >= (std::uint64_t(1) << (3 * b.level))) return "key out of range";
+        if (auto problem = checkVoxelData(b.data, false); !problem.empty()) return problem;
+        if (i > 0) {
+            const VolumeBlock& p = volume.blocks[i - 1];
+            if (volume.finestKey(b) < volume.finestKey(p) + (std::uint64_t(1) << (3 * (L - p.level))))
+                return "blocks out of order or overlapping";
+        }
+        return {};
+    };
+    // Fixed-size records: decoded on all threads, then checked on all threads; the error names
+    // the first bad block, as a sequential reader would.
+    tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, count, 16384), [&](const auto& range) {
+        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
+            ByteReader r(std::string_view(records + kBlockRecordSize * i, kBlockRecordSize));
+            VolumeBlock& b = volume.blocks[i];
+            b.key = r.u64();
+            b.level = r.u8();
+            b.flags = r.u8();
+            b.data = readVoxelData(r);
+        }
+    });
+    std::atomic<std::uint64_t> firstBad{count};
+    tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, count, 16384), [&](const auto& range) {
+        for (std::uint64_t i = range.begin(); i != range.end() && i < firstBad.load(); ++i)
+            if (!problemAt(i).empty()) {
+                std::uint64_t seen = firstBad.load();
+                while (i < seen && !firstBad.compare_exchange_weak(seen, i)) {}
+                return;
+            }
+    });
+    if (firstBad < count)
+        throw InputError(file, problemAt(firstBad), where + ", block " + std::to_string(firstBad.load()));
     return volume;
 }
 

@@ -126,9 +126,9 @@ public:
         return normalDistribution(normal) / mExactMeanArea;
     }
 
-    /// Adds `weight`·f(N)/Ā (normalizedNormalDistribution) to `sums[i]` for each direction
-    /// N = (x[i], y[i], z[i]): the same arithmetic, in a loop the compiler vectorises (the
-    /// filter error evaluates eight children on 512 directions per sampled node).
+    /// Adds `weight`·f(N)/Ā (normalizedNormalDistribution, to rounding) to `sums[i]` for each
+    /// direction N = (x[i], y[i], z[i]), in a loop the compiler vectorises (the filter error
+    /// evaluates eight children on 512 directions per sampled node).
     void accumulateNormalizedNormalDistribution(std::span<const double> x, std::span<const double> y,
                                                 std::span<const double> z, double weight,
                                                 std::span<double> sums) const;
