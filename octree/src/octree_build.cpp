@@ -175,6 +175,8 @@ struct OctreeBuilder::Impl {
     }
 
     static Level mergeSorted(Level a, Level b) {
+        if (b.empty()) return a;  // the common case: no source blocks at a level above the finest
+        if (a.empty()) return b;
         Level out;
         out.reserve(a.size() + b.size());
         std::merge(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out),
@@ -206,6 +208,23 @@ struct OctreeBuilder::Impl {
         auto hi = lo;
         while (hi != c.end() && (hi->key >> 3) == parentKey) ++hi;
         return {std::size_t(lo - c.begin()), std::size_t(hi - c.begin())};
+    }
+
+    // Where each node's children start in levels[level + 1], and one past the last node's: the
+    // children of node i are [starts[i], starts[i + 1]). One linear walk, since both levels are
+    // sorted by key and every node below the root has its parent in the pyramid.
+    std::vector<std::uint32_t> childStarts(std::uint32_t level) const {
+        const Level& parents = levels[level];
+        const Level& children = levels[level + 1];
+        std::vector<std::uint32_t> starts(parents.size() + 1);
+        std::size_t c = 0;
+        for (std::size_t i = 0; i < parents.size(); ++i) {
+            starts[i] = std::uint32_t(c);
+            while (c < children.size() && (children[c].key >> 3) == parents[i].key) ++c;
+        }
+        starts[parents.size()] = std::uint32_t(c);
+        if (c != children.size()) throw std::logic_error("octree pyramid: a node without its parent");
+        return starts;
     }
 
     // Measures the filter error of the sampled nodes that lack it; returns per-level stats.
@@ -405,6 +424,8 @@ Octree OctreeBuilder::compress(Progress& progress) const {
                           for (std::size_t i = range.begin(); i != range.end(); ++i)
                               below[i] = pointRange(m.levels[L][i].data);
                       });
+    std::vector<std::vector<std::uint32_t>> starts(L);
+    tbb::parallel_for(std::uint32_t(0), L, [&](std::uint32_t l) { starts[l] = m.childStarts(l); });
     for (std::uint32_t l = L; l-- > 0;) {
         const Level& level = m.levels[l];
         collapsible[l].assign(level.size(), 0);
@@ -420,7 +441,7 @@ Octree OctreeBuilder::compress(Progress& progress) const {
                     collapsible[l][i] = 1;
                     continue;
                 }
-                const auto [b, e] = m.childRange(l, node.key);
+                const std::size_t b = starts[l][i], e = starts[l][i + 1];
                 bool ok = true;
                 Range r = below[b];
                 if (e - b < 8) r.dmin = 0;  // missing children are empty
@@ -481,7 +502,7 @@ Octree OctreeBuilder::compress(Progress& progress) const {
         for (std::size_t s = 0; s < pyramidIndex.size(); ++s) {
             const std::size_t i = pyramidIndex[s];
             if (collapsible[l][i]) continue;
-            const auto [b, e] = m.childRange(l, m.levels[l][i].key);
+            const std::size_t b = starts[l][i], e = starts[l][i + 1];
             stored[s].firstChild = std::uint32_t(next.size());
             for (std::size_t c = b; c < e; ++c) {
                 stored[s].childMask |= std::uint8_t(1u << (m.levels[l + 1][c].key & 7));
