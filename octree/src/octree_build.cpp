@@ -139,6 +139,22 @@ std::vector<std::size_t> groupStarts(const Level& children, Keep keep) {
     return starts;
 }
 
+// The range of every entry a node's descendants hold (density, the matrix S, albedo): what the
+// tolerance compares a node's own values with. Ranges compare the matrices S (the quaternion of
+// a primitive is not unique).
+struct Range {
+    float dmin, dmax;
+    std::array<float, 6> smin, smax;
+    std::array<float, 3> amin, amax;
+};
+
+Range pointRange(const VoxelData& d) {
+    const Mat3 S = unpackS(d);
+    const std::array<float, 6> s{float(S(0, 0)), float(S(1, 1)), float(S(2, 2)),
+                                 float(S(0, 1)), float(S(0, 2)), float(S(1, 2))};
+    return Range{d.density, d.density, s, s, d.albedo, d.albedo};
+}
+
 }  // namespace
 
 struct OctreeBuilder::Impl {
@@ -225,6 +241,148 @@ struct OctreeBuilder::Impl {
         starts[parents.size()] = std::uint32_t(c);
         if (c != children.size()) throw std::logic_error("octree pyramid: a node without its parent");
         return starts;
+    }
+
+    // Occupancy and density per level (a source block at level k stands for 8^(ℓ−k) voxels).
+    void levelStats(std::vector<LevelStats>& stats) const {
+        const std::uint32_t L = this->L();
+        std::vector<double> srcCount(L + 1, 0), srcMass(L + 1, 0);
+        for (std::uint32_t l = 0; l <= L; ++l) {
+            double count = double(levels[l].size()), mass = 0;
+            for (const auto& n : levels[l]) mass += n.data.density;
+            for (std::uint32_t k = 0; k < l; ++k) {
+                const double copies = std::ldexp(1.0, 3 * int(l - k));
+                count += srcCount[k] * copies;
+                mass += srcMass[k] * copies;
+            }
+            for (const auto& n : levels[l])
+                if (n.flags & kSource) {
+                    srcCount[l] += 1;
+                    srcMass[l] += n.data.density;
+                }
+            LevelStats& s = stats[l];
+            s.occupiedNodes = std::uint64_t(count);
+            s.meanDensity = mass / std::ldexp(1.0, 3 * int(l));
+            s.meanOccupiedDensity = count > 0 ? mass / count : 0;
+        }
+    }
+
+    // Bottom-up: which pyramid nodes may stand for all their descendants within the tolerance.
+    // Ranges of the finest level are not stored (they are points, read from each node's data):
+    // at 1024³ that level alone would take 80 bytes per voxel.
+    std::vector<std::vector<std::uint8_t>> collapsibleNodes(const std::vector<std::vector<std::uint32_t>>& starts,
+                                                            Progress& progress) const {
+        const std::uint32_t L = this->L();
+        const double eps = options.tolerance;
+        std::vector<std::vector<std::uint8_t>> collapsible(L + 1);
+        collapsible[L].assign(levels[L].size(), 1);
+        std::vector<Range> below, current;
+        for (std::uint32_t l = L; l-- > 0;) {
+            const Level& level = levels[l];
+            const auto childRange = [&](std::size_t c) {
+                return l + 1 == L ? pointRange(levels[L][c].data) : below[c];
+            };
+            collapsible[l].assign(level.size(), 0);
+            current.assign(level.size(), Range{});
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, level.size(), 1024),
+                              [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                const PNode& node = level[i];
+                const VoxelData& p = node.data;
+                current[i] = pointRange(p);
+                const Range self = current[i];
+                if (node.flags & kSource) {
+                    collapsible[l][i] = 1;
+                    continue;
+                }
+                const std::size_t b = starts[l][i], e = starts[l][i + 1];
+                bool ok = true;
+                Range r = childRange(b);
+                if (e - b < 8) r.dmin = 0;  // missing children are empty
+                for (std::size_t c = b; c < e && ok; ++c) {
+                    ok = collapsible[l + 1][c] != 0;
+                    const Range cr = childRange(c);
+                    r.dmin = std::min(r.dmin, cr.dmin);
+                    r.dmax = std::max(r.dmax, cr.dmax);
+                    for (int k = 0; k < 6; ++k) {
+                        r.smin[k] = std::min(r.smin[k], cr.smin[k]);
+                        r.smax[k] = std::max(r.smax[k], cr.smax[k]);
+                    }
+                    for (int k = 0; k < 3; ++k) {
+                        r.amin[k] = std::min(r.amin[k], cr.amin[k]);
+                        r.amax[k] = std::max(r.amax[k], cr.amax[k]);
+                    }
+                }
+                if (!ok || !options.compress) continue;
+                // Transmittance: standing for its descendants, the node changes the extinction
+                // anywhere in its voxel by at most Δρ·Â, Â ≤ √(tr S) for every descendant's and
+                // its own normalised S, so the transmittance along any chord of its voxel
+                // (length ≤ √3·h) by at most Δρ·√(tr S_max)·√3·h (|e^−a − e^−b| ≤ |a − b|), for
+                // τ = 1. A missing child is density 0: a node merges with empty space when its own
+                // optical depth across itself is within ε.
+                const double dRho = std::max(double(p.density) - double(r.dmin), double(r.dmax) - double(p.density));
+                const double areaBound = std::sqrt(std::max({0.0, double(r.smax[0]) + double(r.smax[1]) + double(r.smax[2]),
+                                                             double(self.smax[0]) + double(self.smax[1]) + double(self.smax[2])}));
+                ok = dRho * areaBound * std::sqrt(3.0) * std::ldexp(1.0, -int(l)) <= eps;
+                for (int k = 0; k < 6 && ok; ++k)
+                    ok = double(self.smin[k]) - double(r.smin[k]) <= eps &&
+                         double(r.smax[k]) - double(self.smin[k]) <= eps;
+                for (int k = 0; k < 3 && ok; ++k)
+                    ok = double(p.albedo[k]) - double(r.amin[k]) <= eps &&
+                         double(r.amax[k]) - double(p.albedo[k]) <= eps;
+                if (ok) {
+                    collapsible[l][i] = 1;
+                    current[i] = r;
+                }
+            }
+            });
+            std::swap(below, current);
+            progress.advance(1);
+        }
+        return collapsible;
+    }
+
+    // Top-down: the stored tree, level by level. A stored node that cannot stand for its
+    // descendants stores all its pyramid children; their places come from a prefix sum of the
+    // children counts, so each level is filled from all threads.
+    void storeTree(const std::vector<std::vector<std::uint8_t>>& collapsible,
+                   const std::vector<std::vector<std::uint32_t>>& starts, Octree& tree) const {
+        const std::uint32_t L = this->L();
+        tree.levels.assign(L + 1, {});
+        std::vector<std::size_t> pyramidIndex, nextIndex, offsets;
+        if (levels[0].empty()) {
+            tree.levels[0].push_back(OctreeNode{});
+        } else {
+            tree.levels[0].push_back(OctreeNode{levels[0][0].data, 0, 0});
+            pyramidIndex.push_back(0);
+        }
+        for (std::uint32_t l = 0; l < L; ++l) {
+            auto& stored = tree.levels[l];
+            auto& next = tree.levels[l + 1];
+            const Level& children = levels[l + 1];
+            offsets.assign(pyramidIndex.size() + 1, 0);
+            for (std::size_t s = 0; s < pyramidIndex.size(); ++s) {
+                const std::size_t i = pyramidIndex[s];
+                offsets[s + 1] = offsets[s] + (collapsible[l][i] ? 0 : starts[l][i + 1] - starts[l][i]);
+            }
+            next.resize(offsets.back());
+            nextIndex.resize(offsets.back());
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pyramidIndex.size(), 2048),
+                              [&](const tbb::blocked_range<std::size_t>& range) {
+                                  for (std::size_t s = range.begin(); s != range.end(); ++s) {
+                                      const std::size_t i = pyramidIndex[s];
+                                      if (collapsible[l][i]) continue;
+                                      stored[s].firstChild = std::uint32_t(offsets[s]);
+                                      std::size_t out = offsets[s];
+                                      for (std::size_t c = starts[l][i]; c < starts[l][i + 1]; ++c, ++out) {
+                                          stored[s].childMask |= std::uint8_t(1u << (children[c].key & 7));
+                                          next[out] = OctreeNode{children[c].data, 0, 0};
+                                          nextIndex[out] = c;
+                                      }
+                                  }
+                              });
+            std::swap(pyramidIndex, nextIndex);
+        }
     }
 
     // Measures the filter error of the sampled nodes that lack it; returns per-level stats.
@@ -368,150 +526,19 @@ void OctreeBuilder::updateRegion(const VoxelBox& region, std::vector<VolumeBlock
 }
 
 Octree OctreeBuilder::compress(Progress& progress) const {
-    Impl& m = *mImpl;
+    const Impl& m = *mImpl;
     const std::uint32_t L = m.L();
-    const double eps = m.options.tolerance;
     Octree tree;
     tree.info.source = m.volume.info;
     tree.info.rule = m.options.rule;
-    tree.info.tolerance = float(eps);
+    tree.info.tolerance = float(m.options.tolerance);
     tree.stats.assign(L + 1, {});
     progress.start("compress", L + 1);
-
-    // Occupancy and density per level (a source block at level k stands for 8^(ℓ−k) voxels).
-    {
-        std::vector<double> srcCount(L + 1, 0), srcMass(L + 1, 0);
-        for (std::uint32_t l = 0; l <= L; ++l) {
-            double count = double(m.levels[l].size()), mass = 0;
-            for (const auto& n : m.levels[l]) mass += n.data.density;
-            for (std::uint32_t k = 0; k < l; ++k) {
-                const double copies = std::ldexp(1.0, 3 * int(l - k));
-                count += srcCount[k] * copies;
-                mass += srcMass[k] * copies;
-            }
-            for (const auto& n : m.levels[l])
-                if (n.flags & kSource) {
-                    srcCount[l] += 1;
-                    srcMass[l] += n.data.density;
-                }
-            LevelStats& s = tree.stats[l];
-            s.occupiedNodes = std::uint64_t(count);
-            s.meanDensity = mass / std::ldexp(1.0, 3 * int(l));
-            s.meanOccupiedDensity = count > 0 ? mass / count : 0;
-        }
-    }
-    m.measureFilterErrors(tree.stats);
-
-    // Bottom-up: which pyramid nodes may stand for all their descendants.
-    struct Range {
-        float dmin, dmax;
-        std::array<float, 6> smin, smax;
-        std::array<float, 3> amin, amax;
-    };
-    // Ranges compare the matrices S (the quaternion of a primitive is not unique).
-    auto pointRange = [](const VoxelData& d) {
-        const Mat3 S = unpackS(d);
-        const std::array<float, 6> s{float(S(0, 0)), float(S(1, 1)), float(S(2, 2)),
-                                     float(S(0, 1)), float(S(0, 2)), float(S(1, 2))};
-        return Range{d.density, d.density, s, s, d.albedo, d.albedo};
-    };
-    std::vector<std::vector<std::uint8_t>> collapsible(L + 1);
-    std::vector<Range> below, current;
-    collapsible[L].assign(m.levels[L].size(), 1);
-    below.resize(m.levels[L].size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.levels[L].size(), 4096),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                          for (std::size_t i = range.begin(); i != range.end(); ++i)
-                              below[i] = pointRange(m.levels[L][i].data);
-                      });
+    m.levelStats(tree.stats);
+    mImpl->measureFilterErrors(tree.stats);
     std::vector<std::vector<std::uint32_t>> starts(L);
     tbb::parallel_for(std::uint32_t(0), L, [&](std::uint32_t l) { starts[l] = m.childStarts(l); });
-    for (std::uint32_t l = L; l-- > 0;) {
-        const Level& level = m.levels[l];
-        collapsible[l].assign(level.size(), 0);
-        current.assign(level.size(), Range{});
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, level.size(), 1024),
-                          [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                const PNode& node = level[i];
-                const VoxelData& p = node.data;
-                current[i] = pointRange(p);
-                const Range self = current[i];
-                if (node.flags & kSource) {
-                    collapsible[l][i] = 1;
-                    continue;
-                }
-                const std::size_t b = starts[l][i], e = starts[l][i + 1];
-                bool ok = true;
-                Range r = below[b];
-                if (e - b < 8) r.dmin = 0;  // missing children are empty
-                for (std::size_t c = b; c < e && ok; ++c) {
-                    ok = collapsible[l + 1][c] != 0;
-                    const Range& cr = below[c];
-                    r.dmin = std::min(r.dmin, cr.dmin);
-                    r.dmax = std::max(r.dmax, cr.dmax);
-                    for (int k = 0; k < 6; ++k) {
-                        r.smin[k] = std::min(r.smin[k], cr.smin[k]);
-                        r.smax[k] = std::max(r.smax[k], cr.smax[k]);
-                    }
-                    for (int k = 0; k < 3; ++k) {
-                        r.amin[k] = std::min(r.amin[k], cr.amin[k]);
-                        r.amax[k] = std::max(r.amax[k], cr.amax[k]);
-                    }
-                }
-                if (!ok || !m.options.compress) continue;
-                // Transmittance: standing for its descendants, the node changes the extinction
-                // anywhere in its voxel by at most Δρ·Â, Â ≤ √(tr S) for every descendant's and
-                // its own normalised S, so the transmittance along any chord of its voxel
-                // (length ≤ √3·h) by at most Δρ·√(tr S_max)·√3·h (|e^−a − e^−b| ≤ |a − b|), for
-                // τ = 1. A missing child is density 0: a node merges with empty space when its own
-                // optical depth across itself is within ε.
-                const double dRho = std::max(double(p.density) - double(r.dmin), double(r.dmax) - double(p.density));
-                const double areaBound = std::sqrt(std::max({0.0, double(r.smax[0]) + double(r.smax[1]) + double(r.smax[2]),
-                                                             double(self.smax[0]) + double(self.smax[1]) + double(self.smax[2])}));
-                ok = dRho * areaBound * std::sqrt(3.0) * std::ldexp(1.0, -int(l)) <= eps;
-                for (int k = 0; k < 6 && ok; ++k)
-                    ok = double(self.smin[k]) - double(r.smin[k]) <= eps &&
-                         double(r.smax[k]) - double(self.smin[k]) <= eps;
-                for (int k = 0; k < 3 && ok; ++k)
-                    ok = double(p.albedo[k]) - double(r.amin[k]) <= eps &&
-                         double(r.amax[k]) - double(p.albedo[k]) <= eps;
-                if (ok) {
-                    collapsible[l][i] = 1;
-                    current[i] = r;
-                }
-            }
-        });
-        std::swap(below, current);
-        progress.advance(1);
-    }
-
-    // Top-down: the stored tree.
-    tree.levels.assign(L + 1, {});
-    std::vector<std::size_t> pyramidIndex, nextIndex;
-    if (m.levels[0].empty()) {
-        tree.levels[0].push_back(OctreeNode{});
-    } else {
-        tree.levels[0].push_back(OctreeNode{m.levels[0][0].data, 0, 0});
-        pyramidIndex.push_back(0);
-    }
-    for (std::uint32_t l = 0; l < L; ++l) {
-        nextIndex.clear();
-        auto& stored = tree.levels[l];
-        auto& next = tree.levels[l + 1];
-        for (std::size_t s = 0; s < pyramidIndex.size(); ++s) {
-            const std::size_t i = pyramidIndex[s];
-            if (collapsible[l][i]) continue;
-            const std::size_t b = starts[l][i], e = starts[l][i + 1];
-            stored[s].firstChild = std::uint32_t(next.size());
-            for (std::size_t c = b; c < e; ++c) {
-                stored[s].childMask |= std::uint8_t(1u << (m.levels[l + 1][c].key & 7));
-                next.push_back(OctreeNode{m.levels[l + 1][c].data, 0, 0});
-                nextIndex.push_back(c);
-            }
-        }
-        std::swap(pyramidIndex, nextIndex);
-    }
+    m.storeTree(m.collapsibleNodes(starts, progress), starts, tree);
     for (std::uint32_t l = 0; l <= L; ++l) tree.stats[l].storedNodes = tree.levels[l].size();
     progress.finish();
     return tree;
