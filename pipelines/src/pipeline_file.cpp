@@ -94,7 +94,7 @@ Pipeline loadPipeline(const fs::path& file) {
     for (std::size_t i = 0; i < sources.size(); ++i) {
         const toml::table& t = *sources[i];
         const std::string path = indexed("source", i);
-        reader.checkKeys(t, path, {"name", "pattern", "file", "seed", "count", "fluctuation", "lean", "variant"});
+        reader.checkKeys(t, path, {"name", "pattern", "file", "up", "fit", "seed", "count", "fluctuation", "lean", "variant"});
         SourceStep s;
         s.name = reader.string(t, path, "name", {});
         checkName(reader, TomlReader::join(path, "name"), s.name, sourceNames);
@@ -107,7 +107,18 @@ Pipeline loadPipeline(const fs::path& file) {
         } else {
             s.file = reader.resolve(TomlReader::join(path, "file"), reader.string(t, path, "file", {}));
             requireFile(reader, TomlReader::join(path, "file"), s.file);
+            // As `vtex ingest --up x|y|z --fit keep|cell`.
+            const std::string up = reader.string(t, path, "up", std::string());
+            if (!up.empty() && up != "x" && up != "y" && up != "z")
+                reader.fail(TomlReader::join(path, "up"), "must be \"x\", \"y\" or \"z\"");
+            s.up = up.empty() ? 0 : up[0];
+            const std::string fit = reader.string(t, path, "fit", "keep");
+            if (fit != "keep" && fit != "cell") reader.fail(TomlReader::join(path, "fit"), "must be \"keep\" or \"cell\"");
+            s.fitCell = fit == "cell";
         }
+        for (const char* key : {"up", "fit"})
+            if (hasPattern && t.contains(key))
+                reader.fail(TomlReader::join(path, key), "a pattern source is already in the unit cell, +Z up");
         s.seed = std::uint64_t(reader.integer(t, path, "seed", 1, 0, std::numeric_limits<long long>::max()));
         s.count = int(reader.integer(t, path, "count", 0, 0, 1'000'000));
         s.fluctuation = reader.number(t, path, "fluctuation", -1.0, -1.0, 3.2);

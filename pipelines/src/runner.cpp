@@ -222,7 +222,8 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                 d << "pattern " << step.pattern << " seed " << step.seed << " count " << step.count << " fluctuation "
                   << step.fluctuation << " lean " << step.leanDegrees << " variant " << step.variant << "\n";
             else
-                d << "file " << hashFile(step.file) << "\n";
+                d << "file " << hashFile(step.file) << " up " << (step.up ? step.up : '-') << " fit "
+                  << (step.fitCell ? "cell" : "keep") << "\n";
             return d.str();
         };
         s.run = [step](Stage& self) {
@@ -236,7 +237,10 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                 o.variant = step.variant;
                 mesh = sampler::makePattern(step.pattern, o);
             } else {
-                mesh = ingest::loadMesh(step.file);
+                ingest::IngestOptions o;
+                o.up = step.up;
+                o.fitCell = step.fitCell;
+                mesh = ingest::loadMesh(step.file, o);
             }
             ingest::writeMeshGlb(mesh, self.outputs.at("mesh"));
             return Json{{"triangles", mesh.triangles.size()}, {"closed", mesh.closed}};

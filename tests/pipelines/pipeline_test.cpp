@@ -420,11 +420,15 @@ TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {
         {"texels = { cover = \"grass\" }", "renderer = \"reference\""},  // nothing to draw in the cells
         {"count = 8", "count = 8\nvariant = \"radial\""},  // grass does not use a variant
         {"file = \"cross.obj\"", "file = \"cross.obj\"\nlean = 10"},  // a file has no pattern options
+        {"file = \"cross.obj\"", "file = \"cross.obj\"\nup = \"w\""},   // an up axis is x, y or z
+        {"file = \"cross.obj\"", "file = \"cross.obj\"\nfit = \"box\""},  // fit is keep or cell
+        {"pattern = \"grass\"", "pattern = \"grass\"\nfit = \"cell\""},  // a pattern is already in the cell
     };
     const std::vector<std::string> keys = {"texel[0].resolution", "texel[1].source", "source[1].file",
                                            "compare[0].b", "render[0].texels.cover", "source[0]",
                                            "render[0].texels.moss", "line 2", "render[0].renderer",
-                                           "source[0].variant", "source[1].lean"};
+                                           "source[0].variant", "source[1].lean", "source[1].up",
+                                           "source[1].fit", "source[0].fit"};
     for (std::size_t i = 0; i < cases.size(); ++i) {
         std::string bad = good;
         bad.replace(bad.find(cases[i].first), cases[i].first.size(), cases[i].second);

@@ -34,6 +34,8 @@ struct SourceStep {
     std::string name;
     std::string pattern;            ///< a `vtex pattern` name, or empty when `file` is given
     std::filesystem::path file;     ///< a mesh file for ingest (resolved against the pipeline file)
+    char up = 0;                    ///< a file's up axis, 'x' | 'y' | 'z' (ingest::IngestOptions::up); 0: the format's
+    bool fitCell = false;           ///< fit = "cell": scaled and centred into the unit cell (IngestOptions::fitCell)
     std::uint64_t seed = 1;         ///< pattern parameters (see sampler::PatternOptions)
     int count = 0;
     double fluctuation = -1;
