@@ -174,6 +174,7 @@ void emit(const std::string& text, const std::string& output) {
         std::cout << text;
         return;
     }
+    checkOutputPath(output, {});  // a regular file or a new path, as every output (cli.h)
     writeFileAtomically(output, text);
 }
 

@@ -155,6 +155,8 @@ std::vector<Output> outputTable(const Workspace& w) {
         {"compare --diff", {"compare", a, b, "--diff", "OUT"}, {a, b}},
         {"run -o", {"run", pipeline, "-o", "OUT"}, {pipeline}, true},
         {"demo -o", {"demo", "-o", "OUT", "--resolution", "4", "--scale", "0.05"}, {}, true},
+        {"completion -o", {"completion", "bash", "-o", "OUT"}, {}},
+        {"manpage -o", {"manpage", "-o", "OUT"}, {}},
     };
     const std::string companion = (w.out / "c.exr").string();
     for (const std::string command : {"render", "reference"}) {
