@@ -29,9 +29,11 @@ function(vtex_stage_library stage)
   set_property(GLOBAL APPEND PROPERTY VTEX_INSTALLED_STAGES ${stage})
 endfunction()
 
-# vtex_config_dependency(<package> [args...]): a package the installed static libraries need at
-# link time; vtexConfig.cmake calls find_dependency() for it.
+# vtex_config_dependency(<package> [args...]): a package the installed static library of the
+# calling stage (the folder's name: ingest/, render/, …) needs at link time; vtexConfig.cmake
+# calls find_dependency() for it when that stage is among the components asked for.
 function(vtex_config_dependency)
+  get_filename_component(stage ${CMAKE_CURRENT_SOURCE_DIR} NAME)
   string(JOIN " " args ${ARGN})
-  set_property(GLOBAL APPEND PROPERTY VTEX_CONFIG_DEPENDENCIES "find_dependency(${args})")
+  set_property(GLOBAL APPEND PROPERTY VTEX_CONFIG_DEPENDENCIES_${stage} "${args}")
 endfunction()
