@@ -68,8 +68,7 @@ double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const 
     if (!(length > 0)) return depth;
     const Vec3 w = delta / length;
     forEachVoxelOnSegment(tree, level, a, b, [&](const Octree::Found& found, double t0, double t1) {
-        const Mat3 s = unpackS(found.node->data);
-        depth += double(found.node->data.density) * std::sqrt(std::max(0.0, w.dot(s * w))) * (t1 - t0);
+        depth += double(found.node->data.density) * unpackS(found.node->data).projectedArea(w) * (t1 - t0);
     });
     return depth;
 }

@@ -376,9 +376,9 @@ Octree OctreeBuilder::compress(Progress& progress) const {
     };
     // Ranges compare the matrices S (the quaternion of a primitive is not unique).
     auto pointRange = [](const VoxelData& d) {
-        const Mat3 S = unpackS(d);
-        const std::array<float, 6> s{float(S(0, 0)), float(S(1, 1)), float(S(2, 2)),
-                                     float(S(0, 1)), float(S(0, 2)), float(S(1, 2))};
+        const SggxMatrix S = unpackS(d);
+        const std::array<float, 6> s{float(S.xx), float(S.yy), float(S.zz),
+                                     float(S.xy), float(S.xz), float(S.yz)};
         return Range{d.density, d.density, s, s, d.albedo, d.albedo};
     };
     std::vector<std::vector<std::uint8_t>> collapsible(L + 1);

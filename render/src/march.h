@@ -3,7 +3,6 @@
 #pragma once
 
 #include <vtex/octree/octree.h>
-#include <vtex/render/shading.h>
 #include <vtex/render/texel_march.h>
 
 #include <Eigen/Core>
@@ -252,11 +251,6 @@ std::uint64_t march(const MarchVolume& volume, int level, const Eigen::Vector3d&
     return marchBlocks(volume.tree(), level, p0, dir, length, [&](const octree::OctreeNode& node, double s, double ds) {
         return visit(gridVoxel(node.data), s, ds);
     });
-}
-
-/// Â(ω) = √(ωᵀSω) for a node's normalised S.
-inline double normalizedArea(const SggxMatrix& s, const Eigen::Vector3d& w) {
-    return std::sqrt(std::max(s.quadratic(w), 0.0));
 }
 
 }  // namespace vtex::render::detail
