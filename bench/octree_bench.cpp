@@ -1,8 +1,8 @@
 // Cost of the micro-primitive's operations: A(ω) and f(N) run per voxel per ray step in the
 // renderer, filtering per octree node, reflectance per shaded voxel.
-#include <vtex/octree/ellipsoid.h>
 #include <vtex/octree/filtering.h>
-#include <vtex/octree/reflectance.h>
+#include <vtex/primitive/ellipsoid.h>
+#include <vtex/primitive/reflectance.h>
 
 #include <Eigen/Geometry>
 #include <benchmark/benchmark.h>
@@ -13,6 +13,7 @@
 namespace {
 
 using namespace vtex::octree;
+using namespace vtex::primitive;
 
 std::vector<Vec3> randomDirections(std::size_t count, unsigned seed) {
     std::mt19937 rng(seed);

@@ -2,7 +2,7 @@
 // Neyret 1994 §3.2) as its grid grows, against a high-sample reference computed by the
 // independent method (quadrature over normals, 1024 rings = 2.1 M normals). Prints a
 // Markdown table; usage: vtex_reflectance_error [cases=200] [seed=1].
-#include <vtex/octree/reflectance.h>
+#include <vtex/primitive/reflectance.h>
 
 #include <Eigen/Geometry>
 
@@ -14,7 +14,7 @@
 #include <random>
 #include <vector>
 
-using namespace vtex::octree;
+using namespace vtex::primitive;
 
 namespace {
 

@@ -1,7 +1,7 @@
 // The fast micro-primitive reflectance (SGGX visible-normal quadrature) against the paper's
 // numerical integration: error and time per evaluation, on random ellipsoids from spheres to
 // discs and needles, random light and view directions. Prints a table (docs/render.md).
-#include <vtex/render/shading.h>
+#include <vtex/primitive/reflectance_kernel.h>
 
 #include <Eigen/Geometry>
 
@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-using namespace vtex::render;
+using namespace vtex::primitive;
 
 int main() {
     std::mt19937 rng(1);
@@ -31,7 +31,7 @@ int main() {
                          Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized()});
     }
     const double shininess = 20;
-    std::vector<vtex::octree::ReflectanceFactors> reference;
+    std::vector<ReflectanceFactors> reference;
     const auto t0 = std::chrono::steady_clock::now();
     for (const Case& c : cases) reference.push_back(reflectanceReference(c.s, c.l, c.v, shininess, 64));
     const double refTime = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / cases.size();

@@ -3,7 +3,7 @@
 // four decades, random light and view) and cycled through 1024 of them, so branches and the
 // specular cut-off see a realistic mix rather than one repeated case.
 #include <vtex/octree/voxel.h>
-#include <vtex/render/shading.h>
+#include <vtex/primitive/reflectance_kernel.h>
 
 #include <Eigen/Geometry>
 #include <benchmark/benchmark.h>
@@ -14,7 +14,7 @@
 
 namespace {
 
-using namespace vtex::render;
+using namespace vtex::primitive;
 
 constexpr std::size_t kCases = 1024, kSegment = 8;
 
@@ -37,7 +37,7 @@ const Cases& cases() {
             voxel.density = 1;
             vtex::octree::packEllipsoid(vtex::octree::Ellipsoid::fromAxes(r, sigma), voxel);
             out.voxels.push_back(voxel);
-            out.s.push_back(voxelS(voxel));
+            out.s.push_back(vtex::octree::unpackS(voxel));
             // As along a ray segment through a cell: l and v change every kSegment voxels.
             if (k % kSegment == 0) {
                 out.light.push_back(Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
@@ -52,12 +52,12 @@ const Cases& cases() {
     return c;
 }
 
-void BM_VoxelS(benchmark::State& state) {
+void BM_UnpackS(benchmark::State& state) {
     const Cases& c = cases();
     std::size_t i = 0;
-    for (auto _ : state) benchmark::DoNotOptimize(voxelS(c.voxels[i++ & (kCases - 1)]));
+    for (auto _ : state) benchmark::DoNotOptimize(vtex::octree::unpackS(c.voxels[i++ & (kCases - 1)]));
 }
-BENCHMARK(BM_VoxelS);
+BENCHMARK(BM_UnpackS);
 
 // Everything per call: the basis around v and the light in it are rebuilt each time.
 void BM_ReflectanceFast(benchmark::State& state) {

@@ -1,6 +1,7 @@
 // See chord_transmittance.h.
 #include <vtex/octree/chord_transmittance.h>
 
+#include <vtex/octree/cursor.h>
 #include <vtex/octree/voxel.h>
 
 #include "hash.h"
@@ -67,9 +68,8 @@ double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const 
     const double length = delta.norm();
     if (!(length > 0)) return depth;
     const Vec3 w = delta / length;
-    forEachVoxelOnSegment(tree, level, a, b, [&](const Octree::Found& found, double t0, double t1) {
-        const Mat3 s = unpackS(found.node->data);
-        depth += double(found.node->data.density) * std::sqrt(std::max(0.0, w.dot(s * w))) * (t1 - t0);
+    forEachVoxelOnSegment(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
+        depth += double(node.data.density) * unpackS(node.data).projectedArea(w) * (t1 - t0);
     });
     return depth;
 }
@@ -77,7 +77,9 @@ double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const 
 }  // namespace
 
 void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b,
-                           const std::function<void(const Octree::Found&, double, double)>& visit) {
+                           const std::function<void(const OctreeNode&, double, double)>& visit) {
+    if (tree.levels.empty() || tree.levels[0].empty() || level >= tree.levels.size()) return;
+    OctreeCursor cursor(tree);
     const double n = double(std::uint64_t(1) << level);
     const Vec3 delta = b - a;
     const double length = delta.norm();
@@ -99,8 +101,10 @@ void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& 
     while (t < length) {
         const std::size_t k = next[0] <= next[1] && next[0] <= next[2] ? 0 : next[1] <= next[2] ? 1 : 2;
         const double t1 = std::min(next[k], length);
-        if (const auto found = tree.find(level, std::uint32_t(cell[0]), std::uint32_t(cell[1]), std::uint32_t(cell[2])))
-            visit(*found, t, t1);
+        if (const Located found = cursor.locate(int(level), std::uint32_t(cell[0]), std::uint32_t(cell[1]),
+                                                std::uint32_t(cell[2]));
+            found.node)
+            visit(*found.node, t, t1);
         t = t1;
         cell[k] += step[k];
         next[k] += inc[k];

@@ -58,8 +58,8 @@ std::optional<Mat3> storedFilterForm(const VoxelData& voxel, FilterRule rule) {
     // A stored primitive is normalised (Exact) before its σ is rounded to float, so its S is
     // the normalised one to float precision: no elliptic integral, no eigensolver (R and σ are
     // its eigen-form already). ThreeAxis: Ā₃ = π(a₂a₃ + a₁a₃ + a₁a₂)/3 of the same semi-axes.
-    if (rule == FilterRule::Sggx) return unpackS(voxel);
-    const Vec3 a = semiAxesFromSigma(sigma);
+    if (rule == FilterRule::Sggx) return unpackS(voxel).matrix();
+    const Vec3 a = primitive::semiAxesFromSigma(sigma);
     const double threeAxisArea = std::numbers::pi * (a[1] * a[2] + a[0] * a[2] + a[0] * a[1]) / 3;
     const Mat3 R = unpackRotation(voxel);
     return R * (a.cwiseAbs2() / threeAxisArea).asDiagonal() * R.transpose();

@@ -27,22 +27,6 @@ double Octree::compression() const {
     return 1.0 - double(storedNodes()) / voxels;
 }
 
-std::optional<Octree::Found> Octree::find(std::uint32_t level, std::uint32_t x, std::uint32_t y,
-                                          std::uint32_t z) const {
-    if (levels.empty() || level >= levels.size()) return std::nullopt;
-    const OctreeNode* node = &levels[0][0];
-    std::uint32_t l = 0;
-    for (; l < level && !node->isLeaf(); ++l) {
-        const std::uint32_t shift = level - l - 1;
-        const unsigned c = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
-        if (!(node->childMask & (1u << c))) return std::nullopt;
-        const unsigned before = unsigned(std::popcount(unsigned(node->childMask) & ((1u << c) - 1u)));
-        node = &levels[l + 1][node->firstChild + before];
-    }
-    if (node->data.isEmpty()) return std::nullopt;
-    return Found{node, l};
-}
-
 std::vector<VolumeBlock> Octree::expandLevel(std::uint32_t level) const {
     std::vector<VolumeBlock> out;
     if (levels.empty() || level >= levels.size()) return out;

@@ -149,9 +149,8 @@ struct Range {
 };
 
 Range pointRange(const VoxelData& d) {
-    const Mat3 S = unpackS(d);
-    const std::array<float, 6> s{float(S(0, 0)), float(S(1, 1)), float(S(2, 2)),
-                                 float(S(0, 1)), float(S(0, 2)), float(S(1, 2))};
+    const SggxMatrix S = unpackS(d);
+    const std::array<float, 6> s{float(S.xx), float(S.yy), float(S.zz), float(S.xy), float(S.xz), float(S.yz)};
     return Range{d.density, d.density, s, s, d.albedo, d.albedo};
 }
 

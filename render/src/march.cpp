@@ -28,7 +28,7 @@ LevelChoice chooseLevel(double width, double lodBias, int maxLevel) {
 GridVoxel gridVoxel(const octree::VoxelData& data) {
     GridVoxel v;
     v.density = data.density;
-    v.s = voxelS(data);
+    v.s = octree::unpackS(data);
     v.albedo = data.albedo;
     return v;
 }
@@ -160,7 +160,7 @@ SegmentTransmittance marchTransmittance(const MarchVolume& volume, double tau, c
     double opticalDepth = 0;
     const double maxDepth = cutoff > 0 ? -std::log(cutoff) : INFINITY;
     out.blocks = detail::march(volume, level, from, dir, length, [&](const GridVoxel& voxel, double, double ds) {
-        opticalDepth += tau * voxel.density * detail::normalizedArea(voxel.s, dir) * ds;
+        opticalDepth += tau * voxel.density * voxel.s.projectedArea(dir) * ds;
         return opticalDepth < maxDepth;
     });
     out.transmittance = std::exp(-opticalDepth);

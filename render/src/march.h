@@ -2,96 +2,18 @@
 // renderer's per-voxel shading inlines into the loop.
 #pragma once
 
+#include <vtex/octree/cursor.h>
 #include <vtex/octree/octree.h>
-#include <vtex/render/shading.h>
 #include <vtex/render/texel_march.h>
 
 #include <Eigen/Core>
 
 #include <algorithm>
-#include <array>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 namespace vtex::render::detail {
-
-// The number of set bits below bit c of a child mask, from a table: without -mpopcnt,
-// std::popcount is a library call, and this lookup runs at every level of every step.
-inline constexpr auto kBitsBelow = [] {
-    std::array<std::array<std::uint8_t, 8>, 256> table{};
-    for (unsigned mask = 0; mask < 256; ++mask)
-        for (unsigned c = 0; c < 8; ++c) {
-            unsigned n = 0;
-            for (unsigned b = 0; b < c; ++b) n += (mask >> b) & 1u;
-            table[mask][c] = std::uint8_t(n);
-        }
-    return table;
-}();
-
-struct Located {
-    const octree::OctreeNode* node;  ///< nullptr for empty space
-    int blockLevel;                  ///< the level at which the answer is uniform
-};
-
-/// The node that stands for voxel (x, y, z) of `level`, and the level of the uniform block
-/// around it (a leaf above, or the missing child that makes the block empty). See Octree::find.
-inline Located locate(const octree::Octree& tree, int level, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    const octree::OctreeNode* node = &tree.levels[0][0];
-    int l = 0;
-    while (l < level && !node->isLeaf()) {
-        const int shift = level - l - 1;
-        const unsigned c = ((x >> shift) & 1u) | (((y >> shift) & 1u) << 1) | (((z >> shift) & 1u) << 2);
-        if (!(node->childMask & (1u << c))) return {nullptr, l + 1};
-        const unsigned before = kBitsBelow[node->childMask][c];
-        node = &tree.levels[std::size_t(l + 1)][node->firstChild + before];
-        ++l;
-    }
-    if (node->data.isEmpty()) return {nullptr, l};
-    return {node, l};
-}
-
-/// The path from the root to the node last located, so that the next lookup starts from the
-/// deepest ancestor the two voxels share instead of the root: consecutive steps of a march are
-/// neighbours, and most of them share all but the last level or two. The answer is the same as
-/// locate()'s.
-struct LocateCursor {
-    std::array<const octree::OctreeNode*, 32> path{};
-    int depth = -1;  ///< path[0..depth] valid; −1: nothing located yet
-    std::uint32_t x = 0, y = 0, z = 0;
-
-    Located find(const octree::Octree& tree, int level, std::uint32_t nx, std::uint32_t ny, std::uint32_t nz) {
-        int l = 0;
-        if (depth < 0) {
-            path[0] = &tree.levels[0][0];
-            depth = 0;
-        } else {
-            const std::uint32_t diff = (nx ^ x) | (ny ^ y) | (nz ^ z);
-            // Ancestors at levels l ≤ level − bit_width(diff) hold both voxels.
-            l = std::min(depth, level - int(std::bit_width(diff)));
-        }
-        x = nx;
-        y = ny;
-        z = nz;
-        const octree::OctreeNode* node = path[std::size_t(l)];
-        while (l < level && !node->isLeaf()) {
-            const int shift = level - l - 1;
-            const unsigned c = ((nx >> shift) & 1u) | (((ny >> shift) & 1u) << 1) | (((nz >> shift) & 1u) << 2);
-            if (!(node->childMask & (1u << c))) {
-                depth = l;
-                return {nullptr, l + 1};
-            }
-            const unsigned before = kBitsBelow[node->childMask][c];
-            node = &tree.levels[std::size_t(l + 1)][node->firstChild + before];
-            ++l;
-            path[std::size_t(l)] = node;
-        }
-        depth = l;
-        if (node->data.isEmpty()) return {nullptr, l};
-        return {node, l};
-    }
-};
 
 /// Marches p0 + s·dir, s ∈ [0, length] (reference units, dir unit), at `level`, calling
 /// visit(node, s0, ds) for every non-empty block in front-to-back order; visit returns false to
@@ -113,7 +35,7 @@ std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Ve
     const double extent = std::abs(dir.x()) * length + std::abs(dir.y()) * length + std::abs(dir.z()) * length;
     const std::uint64_t maxSteps = std::uint64_t(std::min(1e7, 3 * (extent + 3) * double(n) + 64));
     std::uint64_t steps = 0;
-    LocateCursor cursor;
+    octree::OctreeCursor cursor(tree);
     double s = 0;
     while (s < length && steps < maxSteps) {
         ++steps;
@@ -129,7 +51,7 @@ std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Ve
         // on two's complement, idx & (n − 1) is the non-negative idx mod n.
         const std::uint32_t wx = std::uint32_t(idx[0] & (n - 1));
         const std::uint32_t wy = std::uint32_t(idx[1] & (n - 1));
-        const Located found = cursor.find(tree, level, wx, wy, std::uint32_t(idx[2]));
+        const octree::Located found = cursor.locate(level, wx, wy, std::uint32_t(idx[2]));
         const std::int64_t size = std::int64_t(1) << (level - found.blockLevel);
         const std::int64_t base[3] = {idx[0] & ~(size - 1), idx[1] & ~(size - 1), idx[2] & ~(size - 1)};
         double exit = length;
@@ -252,11 +174,6 @@ std::uint64_t march(const MarchVolume& volume, int level, const Eigen::Vector3d&
     return marchBlocks(volume.tree(), level, p0, dir, length, [&](const octree::OctreeNode& node, double s, double ds) {
         return visit(gridVoxel(node.data), s, ds);
     });
-}
-
-/// Â(ω) = √(ωᵀSω) for a node's normalised S.
-inline double normalizedArea(const SggxMatrix& s, const Eigen::Vector3d& w) {
-    return std::sqrt(std::max(s.quadratic(w), 0.0));
 }
 
 }  // namespace vtex::render::detail

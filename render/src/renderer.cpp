@@ -10,7 +10,6 @@
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 #include <vtex/core/memory_budget.h>
-#include <vtex/render/shading.h>
 #include <vtex/render/texel_march.h>
 
 #include "footprint.h"

@@ -20,7 +20,7 @@ constexpr double kShadowConeScale = 2.0;
 
 // What one march keeps per light as it goes: the last shadow query and the last reflectance.
 struct MarchLight {
-    octree::ReflectanceFactors reflectance;
+    primitive::ReflectanceFactors reflectance;
     bool haveReflectance = false;
     double shadow = 0;
     double shadowAt = 0;  ///< the march's transmittance when the shadow was taken
@@ -98,8 +98,8 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
     const double tau = texel.tauAt(level);
     counters.voxels += detail::march(*texel.volume, level, span.p0, span.dir, span.length,
         [&](const GridVoxel& voxel, double s, double ds) {
-            const SggxMatrix& sMatrix = voxel.s;
-            const double sigma = tau * double(voxel.density) * detail::normalizedArea(sMatrix, span.dir);
+            const primitive::SggxMatrix& sMatrix = voxel.s;
+            const double sigma = tau * double(voxel.density) * sMatrix.projectedArea(span.dir);
             // 1 − exp rather than expm1 (which takes 1.7× as long here): the opacity is only
             // added to and multiplied with quantities of order one, where its absolute error (an
             // ulp of 1) is what counts.
@@ -174,11 +174,11 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                     ++counters.reflectance;
                     ml.reflectance = sl.kernel ? (*sl.kernel)(sMatrix)
                                      : mOptions.shading == ShadingMode::Fast
-                                         ? reflectanceFast(sMatrix, lr, view, m.shininess)
-                                         : reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
+                                         ? primitive::reflectanceFast(sMatrix, lr, view, m.shininess)
+                                         : primitive::reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
                     ml.haveReflectance = true;
                 }
-                const octree::ReflectanceFactors& f = ml.reflectance;
+                const primitive::ReflectanceFactors& f = ml.reflectance;
                 lk += ml.shadow * e.cwiseProduct(m.diffuse.cwiseProduct(albedo) * f.diffuse + m.specular * f.specular);
             }
             r.radiance += r.transmittance * alpha * lk;

@@ -6,7 +6,7 @@
 
 #include <vtex/render/renderer.h>
 #include <vtex/render/scene.h>
-#include <vtex/render/shading.h>
+#include <vtex/primitive/reflectance_kernel.h>
 
 #include "frame.h"
 #include "per_light.h"
@@ -41,7 +41,7 @@ struct SpanContext {
         int latticeSlot = -1;  ///< directional, usable, and the cell has a transmittance lattice
         Vec3 lw = Vec3::Zero(), lr = Vec3::Zero();
         Color e = Color::Zero();
-        std::optional<ReflectanceKernel> kernel;  ///< directional, usable, fast shading
+        std::optional<primitive::ReflectanceKernel> kernel;  ///< directional, usable, fast shading
     };
 
     /// `scale`: localScale at the span's middle, which the caller took to choose the levels.

@@ -1,7 +1,7 @@
 // Filtering rules of DESIGN.md, "Octree: filtering and compression": conservative where they
 // must be (copies, opposite bases), and different in the documented ways on crossed discs and
 // crossed fibres, with the filter error measuring the difference.
-#include "shapes.h"
+#include "../primitive/shapes.h"
 
 #include <vtex/octree/filtering.h>
 
@@ -12,9 +12,9 @@
 namespace vtex::octree {
 namespace {
 
-using test::randomDirection;
-using test::randomRotation;
-using test::standardShapes;
+using primitive::test::randomDirection;
+using primitive::test::randomRotation;
+using primitive::test::standardShapes;
 
 const FilterRule kRules[] = {FilterRule::Neyret, FilterRule::Sggx};
 

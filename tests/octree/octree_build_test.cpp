@@ -1,4 +1,5 @@
 // The sparse octree: filtering, compression, lossless tolerance 0, partial recompute.
+#include <vtex/octree/cursor.h>
 #include <vtex/octree/octree.h>
 
 #include <gtest/gtest.h>
@@ -85,28 +86,6 @@ TEST(OctreeBuild, MortonKeysRoundTrip) {
     EXPECT_EQ(mortonEncode(0, 0, 1), 4u);
 }
 
-TEST(OctreeBuild, PackedEllipsoidKeepsDiscsAndNeedles) {
-    const Mat3 R = Eigen::Quaterniond(0.3, -0.2, 0.8, 0.1).normalized().toRotationMatrix();
-    for (const Vec3& axes : {Vec3(1e-5, 1, 1), Vec3(1, 1, 1e5), Vec3(0.3, 1.0, 2.5)}) {
-        const Ellipsoid e = Ellipsoid::fromAxes(R, axes).normalized();
-        VoxelData d;
-        d.density = 1;
-        packEllipsoid(e, d);
-        const auto back = unpackEllipsoid(d);
-        ASSERT_TRUE(back);
-        for (int k = 0; k < 3; ++k) EXPECT_NEAR(back->semiAxes()[k] / e.semiAxes()[k], 1.0, 1e-4) << axes.transpose();
-        // S itself, including the eigenvalues 1e-8 below the largest that 6 floats would lose.
-        const Mat3 R2 = back->basis().transpose() * e.basis();  // the same axes, up to sign/order
-        const Vec3& a = e.semiAxes();
-        auto distinct = [](double x, double y) { return std::abs(x - y) > 1e-9 * std::max(x, y); };
-        for (int k = 0; k < 3; ++k)
-            if ((k == 0 || distinct(a[k], a[k - 1])) && (k == 2 || distinct(a[k], a[k + 1]))) {
-                EXPECT_GT(std::abs(R2(k, k)), 0.9999) << axes.transpose();
-            }
-        EXPECT_LT((unpackS(d) - e.S()).norm(), 1e-6 * e.S().norm());
-    }
-}
-
 TEST(OctreeBuild, EmptyVolumeStoresOneNode) {
     SparseVolume v;
     v.info.levels = 6;
@@ -115,7 +94,7 @@ TEST(OctreeBuild, EmptyVolumeStoresOneNode) {
     EXPECT_EQ(tree.levels[0][0].data.density, 0.0f);
     EXPECT_TRUE(tree.levels[0][0].isLeaf());
     EXPECT_DOUBLE_EQ(tree.compression(), 1.0 - 1.0 / (64.0 * 64 * 64));
-    EXPECT_FALSE(tree.find(6, 3, 4, 5));
+    EXPECT_EQ(OctreeCursor(tree).locate(6, 3, 4, 5).node, nullptr);
 }
 
 TEST(OctreeBuild, ConstantHalfSpaceStoresOrderNSquaredNodes) {
@@ -212,50 +191,30 @@ TEST(OctreeBuild, ToleranceBoundsTheTransmittanceChangeOfEveryLeaf) {
     for (const SparseVolume* v : {&noisy, &sheet}) {
         for (const double eps : {0.01, 0.1, 0.5}) {
             const Octree exact = build(*v, 0), loose = build(*v, eps);
+            OctreeCursor exactCursor(exact);
             EXPECT_LE(loose.storedNodes(), exact.storedNodes());
             // Every leaf above the finest level: the finest voxels below it.
             for (std::uint32_t l = 0; l < 5; ++l)
                 for (const auto& leaf : loose.expandLevel(l)) {
-                    const auto found = loose.find(l, octree::mortonDecode(leaf.key)[0], octree::mortonDecode(leaf.key)[1],
-                                                  octree::mortonDecode(leaf.key)[2]);
-                    if (!found || found->level != l || !found->node->isLeaf()) continue;
-                    const Mat3 S = unpackS(found->node->data);
-                    const double h = std::ldexp(1.0, -int(l)), bound = eps / (std::sqrt(S.trace()) * std::sqrt(3.0) * h);
+                    const auto at = octree::mortonDecode(leaf.key);
+                    const Located found = OctreeCursor(loose).locate(int(l), at[0], at[1], at[2]);
+                    if (!found.node || found.blockLevel != int(l) || !found.node->isLeaf()) continue;
+                    const SggxMatrix S = unpackS(found.node->data);
+                    const double h = std::ldexp(1.0, -int(l)), bound = eps / (std::sqrt(S.xx + S.yy + S.zz) * std::sqrt(3.0) * h);
                     const std::uint32_t shift = 5 - l;
                     const auto xyz = octree::mortonDecode(leaf.key);
                     for (std::uint32_t z = 0; z < (1u << shift); ++z)
                         for (std::uint32_t y = 0; y < (1u << shift); ++y)
                             for (std::uint32_t x = 0; x < (1u << shift); ++x) {
-                                const auto fine = exact.find(5, (xyz[0] << shift) + x, (xyz[1] << shift) + y, (xyz[2] << shift) + z);
-                                const double rho = fine ? double(fine->node->data.density) : 0.0;
-                                ASSERT_LE(std::abs(rho - double(found->node->data.density)), bound * (1 + 1e-5))
+                                const Located fine = exactCursor.locate(5, (xyz[0] << shift) + x, (xyz[1] << shift) + y,
+                                                                        (xyz[2] << shift) + z);
+                                const double rho = fine.node ? double(fine.node->data.density) : 0.0;
+                                ASSERT_LE(std::abs(rho - double(found.node->data.density)), bound * (1 + 1e-5))
                                     << "eps " << eps << " level " << l;
                             }
                 }
         }
         EXPECT_LT(build(*v, 0.5).storedNodes(), build(*v, 0).storedNodes());
-    }
-}
-
-TEST(OctreeBuild, FindMatchesTheExpandedLevels) {
-    const auto v = randomVolume(4, 500, 5);
-    const Octree tree = build(v, 0.5);
-    for (std::uint32_t l = 0; l <= 4; ++l) {
-        const auto blocks = tree.expandLevel(l);
-        std::size_t found = 0;
-        const std::uint32_t n = 1u << l;
-        for (std::uint32_t z = 0; z < n; ++z)
-            for (std::uint32_t y = 0; y < n; ++y)
-                for (std::uint32_t x = 0; x < n; ++x)
-                    if (auto f = tree.find(l, x, y, z)) {
-                        ++found;
-                        const auto it = std::lower_bound(blocks.begin(), blocks.end(), mortonEncode(x, y, z),
-                                                         [](const VolumeBlock& b, std::uint64_t k) { return b.key < k; });
-                        ASSERT_NE(it, blocks.end());
-                        EXPECT_EQ(it->key, mortonEncode(x, y, z));
-                        EXPECT_EQ(it->data, f->node->data);
-                    }
-        EXPECT_EQ(found, blocks.size()) << l;
     }
 }
 

@@ -154,7 +154,7 @@ TEST(ChordTransmittance, WalkAndMeasureAgreeWithClosedForms) {
     const auto tree = makeOctree(3, [](int, int, int) { return std::optional(sphereVoxel(2.0f)); });
     double covered = 0, length = 0;
     const Eigen::Vector3d a(0.1, 0.05, 0), b(0.93, 0.7, 1);
-    vtex::octree::forEachVoxelOnSegment(*tree, 3, a, b, [&](const vtex::octree::Octree::Found&, double t0, double t1) {
+    vtex::octree::forEachVoxelOnSegment(*tree, 3, a, b, [&](const vtex::octree::OctreeNode&, double t0, double t1) {
         EXPECT_GE(t1, t0);
         covered += t1 - t0;
     });

@@ -1,10 +1,11 @@
-// The marches of march.h: the block march's incremental lookup (LocateCursor) against the lookup
-// from the root, and the dense-grid walk against the block march.
+// The marches of march.h: the block march (one octree cursor per march, reusing its path) against
+// a lookup from the root for every block, and the dense-grid walk against the block march.
 #include "fixtures.h"
 #include "../../render/src/march.h"
 
 #include <gtest/gtest.h>
 
+#include <vtex/octree/cursor.h>
 #include <vtex/octree/voxel.h>
 #include <vtex/render/texel_march.h>
 
@@ -39,7 +40,7 @@ TEST(March, CursorFindsWhatTheLookupFromTheRootFinds) {
             const std::int64_t m = std::int64_t(1) << level;
             const auto wrap = [m](double c) { return std::uint32_t(((std::int64_t(std::floor(c * double(m))) % m) + m) % m); };
             const auto z = std::uint32_t(std::clamp<std::int64_t>(std::int64_t(std::floor(q.z() * double(m))), 0, m - 1));
-            const detail::Located expected = detail::locate(*tree, level, wrap(q.x()), wrap(q.y()), z);
+            const vtex::octree::Located expected = vtex::octree::OctreeCursor(*tree).locate(level, wrap(q.x()), wrap(q.y()), z);
             EXPECT_EQ(expected.node, &node);
             ++compared;
             return true;
@@ -87,7 +88,7 @@ TEST(March, GridWalkVisitsWhatTheBlockMarchVisits) {
                     const int zz = z + dz;
                     if (zz < 0 || zz >= m) continue;
                     const auto wrap = [m](int c) { return std::uint32_t(((c % m) + m) % m); };
-                    if (detail::locate(*tree, l, wrap(x + dx), wrap(y + dy), std::uint32_t(zz)).node)
+                    if (vtex::octree::OctreeCursor(*tree).locate(l, wrap(x + dx), wrap(y + dy), std::uint32_t(zz)).node)
                         best = std::min(best, std::max({std::abs(dx), std::abs(dy), std::abs(dz)}));
                 }
         const LevelGrid* grid = volume.grid(l);

@@ -1,7 +1,6 @@
 // The renderer end to end on small in-memory scenes (64×64 or less): the tests.
 #include "fixtures.h"
 
-#include <vtex/render/shading.h>
 #include <vtex/render/texel_march.h>
 
 #include <gtest/gtest.h>
@@ -252,30 +251,6 @@ TEST(Render, ExtremeScenesStayFinite) {
             ASSERT_LE(r.image.rgba[4 * i + 3], 1.f + 1e-6f) << name;
         }
     }
-}
-
-// The fast reflectance against the paper's integration on random ellipsoids and directions.
-TEST(Shading, FastPathIsCloseToTheReference) {
-    std::mt19937 rng(21);
-    std::normal_distribution<double> n;
-    std::uniform_real_distribution<double> u(0.05, 1);
-    double diffuseError = 0, diffuseScale = 0;
-    const int trials = 150;
-    for (int k = 0; k < trials; ++k) {
-        const Eigen::Matrix3d r = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
-        const Eigen::Vector3d sigma(u(rng), u(rng), u(rng));
-        const Eigen::Matrix3d s = r * sigma.cwiseAbs2().asDiagonal() * r.transpose();
-        const SggxMatrix m{s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(0, 2), s(1, 2)};
-        const Eigen::Vector3d l = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
-        const Eigen::Vector3d v = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
-        const auto fast = reflectanceFast(m, l, v, 20);
-        const auto ref = reflectanceReference(m, l, v, 20, 64);
-        diffuseError += std::abs(fast.diffuse - ref.diffuse);
-        diffuseScale += ref.diffuse;
-        EXPECT_TRUE(std::isfinite(fast.diffuse) && std::isfinite(fast.specular));
-    }
-    // Mean absolute error relative to the mean diffuse factor.
-    EXPECT_LT(diffuseError / diffuseScale, 0.05);
 }
 
 // The second level of a blend reuses the first level's shadow rays taken within one coarse voxel

@@ -176,7 +176,7 @@ TEST(Sampler, BushParentsAreTheFilterOfTheirChildrenRebuiltAsEllipsoids) {
                 }
                 const auto reference = octree::filterEllipsoids(children, weights, rule);
                 ASSERT_TRUE(reference);
-                const octree::Mat3 expected = reference->S(), stored = octree::unpackS(node.data);
+                const octree::Mat3 expected = reference->S(), stored = octree::unpackS(node.data).matrix();
                 worst = std::max(worst, (stored - expected).norm() / expected.norm());
                 ++checked;
             }

@@ -88,9 +88,10 @@ ShellChordFit measureShellChords(const Octree& tree, const ChordVisibility& visi
                                  double scale, double tau = 1, int chords = 4096, std::uint64_t seed = 1);
 
 /// Visits the non-empty voxels of `level` that the segment a → b (inside the unit cube) crosses,
-/// front to back, as visit(node found, t0, t1) with [t0, t1] the distances from a along the
-/// segment (an exact Amanatides–Woo walk; a leaf above the level stands for its voxels).
+/// front to back, as visit(node that stands for the voxel, t0, t1) with [t0, t1] the distances
+/// from a along the segment (an exact Amanatides–Woo walk; a leaf above the level stands for its
+/// voxels). Nothing for a level the tree does not have.
 void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b,
-                           const std::function<void(const Octree::Found&, double, double)>& visit);
+                           const std::function<void(const OctreeNode&, double, double)>& visit);
 
 }  // namespace vtex::octree

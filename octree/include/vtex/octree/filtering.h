@@ -6,7 +6,6 @@
 /// (DESIGN.md, "Octree: filtering and compression"); filterError() measures each.
 #pragma once
 
-#include <vtex/octree/ellipsoid.h>
 #include <vtex/octree/voxel.h>
 
 #include <optional>

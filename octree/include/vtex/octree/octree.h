@@ -76,14 +76,7 @@ public:
     /// 1 − stored nodes / N³.
     double compression() const;
 
-    /// The node that stands for voxel (x, y, z) of `level` (indices at that level): the stored
-    /// node at that level or the leaf above it. Empty optional for empty space.
-    struct Found {
-        const OctreeNode* node;
-        std::uint32_t level;  ///< where it is stored (≤ the level asked for)
-    };
-    std::optional<Found> find(std::uint32_t level, std::uint32_t x, std::uint32_t y,
-                              std::uint32_t z) const;
+    // Lookups of a voxel: OctreeCursor (octree/cursor.h), the one descent of the tree.
 
     /// Every non-empty voxel of `level` that the compressed tree stands for, each as a block at
     /// `level` (leaves above are replicated): for tests and tools, O(8^level) at worst.

@@ -3,21 +3,26 @@
 ///
 /// A voxel of the reference volume (the unit cube, 2^L voxels per side at level L) holds a
 /// density ρ (1/length, reference units), the micro-primitive normalised to unit mean apparent
-/// area (DESIGN.md, "The micro-primitive") and a linear-RGB albedo. The primitive is stored as
-/// its SGGX matrix in eigen-form, S = R diag(σ²) Rᵀ: R as a unit quaternion and the three σ
-/// (the projected areas along the axes). The 6 entries of S in float would not do: a disc's S
-/// has in-plane eigenvalues 1e-8 of the largest (the axis-ratio floor squared), below float
-/// resolution, so its in-plane shape would be rounding noise; σ keeps them to 7 digits. An empty
-/// voxel has ρ = 0 and is never stored.
+/// area (DESIGN.md, "The micro-primitive") in the stored form of primitive/packing.h, and a
+/// linear-RGB albedo. An empty voxel has ρ = 0 and is never stored.
 #pragma once
 
-#include <vtex/octree/ellipsoid.h>
+#include <vtex/primitive/ellipsoid.h>
+#include <vtex/primitive/packing.h>
+#include <vtex/primitive/sggx.h>
 
 #include <array>
 #include <cstdint>
 #include <optional>
 
 namespace vtex::octree {
+
+// The micro-primitive's maths lives in vtex::primitive; the octree uses it by these names.
+using primitive::Ellipsoid;
+using primitive::Mat3;
+using primitive::Normalization;
+using primitive::SggxMatrix;
+using primitive::Vec3;
 
 /// The deepest level a Morton key can name: 3·20 = 60 bits, 2^20 voxels per side.
 inline constexpr int kMaxLevel = 20;
@@ -45,14 +50,24 @@ struct VoxelData {
 };
 
 /// Stores an ellipsoid (any size: it is normalised first) into `voxel`'s rotation and sigma.
-void packEllipsoid(const Ellipsoid& ellipsoid, VoxelData& voxel);
-/// The ellipsoid a voxel stores; empty for an empty voxel or a degenerate σ.
-std::optional<Ellipsoid> unpackEllipsoid(const VoxelData& voxel);
-/// The SGGX matrix S = R diag(σ²) Rᵀ a voxel stores (double precision).
-Mat3 unpackS(const VoxelData& voxel);
-/// The rotation R a voxel stores (its quaternion normalised; zero for a zero quaternion).
-Mat3 unpackRotation(const VoxelData& voxel);
+inline void packEllipsoid(const Ellipsoid& ellipsoid, VoxelData& voxel) {
+    const primitive::PackedPrimitive p = primitive::pack(ellipsoid);
+    voxel.rotation = p.rotation;
+    voxel.sigma = p.sigma;
+}
 /// Stores the isotropic primitive (a sphere, S = identity).
-void packIsotropic(VoxelData& voxel);
+inline void packIsotropic(VoxelData& voxel) {
+    voxel.rotation = primitive::kIsotropic.rotation;
+    voxel.sigma = primitive::kIsotropic.sigma;
+}
+/// The rotation R a voxel stores (primitive::unpackRotation).
+inline Mat3 unpackRotation(const VoxelData& voxel) { return primitive::unpackRotation(voxel.rotation); }
+/// The normalised SGGX matrix a voxel stores (primitive::unpackS).
+inline SggxMatrix unpackS(const VoxelData& voxel) { return primitive::unpackS(voxel.rotation, voxel.sigma); }
+/// The ellipsoid a voxel stores; empty for an empty voxel or a degenerate σ.
+inline std::optional<Ellipsoid> unpackEllipsoid(const VoxelData& voxel) {
+    if (voxel.isEmpty()) return std::nullopt;
+    return primitive::unpackEllipsoid(voxel.rotation, voxel.sigma);
+}
 
 }  // namespace vtex::octree

@@ -24,7 +24,7 @@ class AtomicOutputFile;
 
 namespace vtex::render {
 
-/// How a voxel's micro-primitive reflects light (octree/reflectance.h).
+/// How a voxel's micro-primitive reflects light (primitive/reflectance.h, reflectance_kernel.h).
 enum class ShadingMode {
     /// The paper's numerical integration over the apparent ellipse
     /// (phongReflectanceApparentEllipse): slow, the reference.

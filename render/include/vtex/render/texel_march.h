@@ -12,7 +12,7 @@
 
 #include <vtex/octree/octree.h>
 #include <vtex/octree/voxel.h>
-#include <vtex/render/shading.h>
+#include <vtex/primitive/sggx.h>
 
 #include <Eigen/Core>
 
@@ -44,11 +44,11 @@ struct SegmentTransmittance {
     std::uint64_t blocks = 0;  ///< octree blocks stepped through
 };
 
-/// One voxel's data as a march reads it: the octree node's, with S unpacked once (voxelS, kept
-/// in double precision: the same values as unpacking it at every visit) so that a march does not
-/// rebuild it from the quaternion at every visit. 64 bytes, a cache line.
+/// One voxel's data as a march reads it: the octree node's, with S unpacked once
+/// (octree::unpackS, kept in double precision: the same values as unpacking it at every visit)
+/// so that a march does not rebuild it from the quaternion at every visit. 64 bytes, a cache line.
 struct GridVoxel {
-    SggxMatrix s;
+    primitive::SggxMatrix s;
     float density = 0;  ///< ρ; 0 only for the empty sentinel
     std::array<float, 3> albedo{};
 };

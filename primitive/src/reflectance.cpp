@@ -3,15 +3,15 @@
 // circumscribing the apparent ellipse (obtained from the quadratic form); moreover only half
 // of the ellipse is sampled, the symmetric normals following from the ellipsoid's
 // properties." Method (b) integrates the same quantity over the Gauss map instead.
-#include <vtex/octree/reflectance.h>
-#include <vtex/octree/quadrature.h>
+#include <vtex/primitive/reflectance.h>
+#include <vtex/primitive/quadrature.h>
 
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
 #include <numbers>
 
-namespace vtex::octree {
+namespace vtex::primitive {
 namespace {
 
 constexpr double kInvPi = std::numbers::inv_pi;
@@ -139,4 +139,11 @@ ReflectanceFactors phongReflectanceNormalQuadrature(const Ellipsoid& ellipsoid, 
     return {diffuse / visibleArea, specular / visibleArea};
 }
 
-}  // namespace vtex::octree
+ReflectanceFactors reflectanceReference(const SggxMatrix& s, const Vec3& light, const Vec3& view, double shininess,
+                                        int samplesPerAxis) {
+    const auto ellipsoid = Ellipsoid::fromS(s.matrix());
+    if (!ellipsoid) return {};
+    return phongReflectanceApparentEllipse(*ellipsoid, light, view, shininess, samplesPerAxis);
+}
+
+}  // namespace vtex::primitive

@@ -2,8 +2,8 @@
 /// @brief Shared shapes and integrators for the micro-primitive tests.
 #pragma once
 
-#include <vtex/octree/ellipsoid.h>
-#include <vtex/octree/quadrature.h>
+#include <vtex/primitive/ellipsoid.h>
+#include <vtex/primitive/quadrature.h>
 
 #include <Eigen/Geometry>
 
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace vtex::octree::test {
+namespace vtex::primitive::test {
 
 inline Mat3 randomRotation(std::mt19937& rng) {
     std::normal_distribution<double> gauss;
@@ -124,4 +124,21 @@ inline double parametricSurfaceArea(Vec3 a) {
     return 8 * total;  // one octant
 }
 
-}  // namespace vtex::octree::test
+// Normals of the surface of `e` with their areas: the Gauss–Legendre grid of the parametric
+// sphere u pushed through x = L u.
+inline void sampleSurfaceNormals(const Ellipsoid& e, int rings, std::vector<Vec3>& normals,
+                          std::vector<double>& areas) {
+    const Vec3& a = e.semiAxes();
+    const QuadratureRule rule = gaussLegendre(rings);
+    for (int i = 0; i < rings; ++i) {
+        const double z = rule.nodes[i], r = std::sqrt(1 - z * z);
+        for (int j = 0; j < 2 * rings; ++j) {
+            const double phi = std::numbers::pi * (j + 0.5) / rings;
+            const Vec3 scaled = a.cwiseInverse().cwiseProduct(Vec3(r * std::cos(phi), r * std::sin(phi), z));
+            normals.push_back(e.basis() * scaled.normalized());
+            areas.push_back(rule.weights[i] * a.prod() * scaled.norm());
+        }
+    }
+}
+
+}  // namespace vtex::primitive::test

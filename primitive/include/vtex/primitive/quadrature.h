@@ -4,7 +4,7 @@
 
 #include <vector>
 
-namespace vtex::octree {
+namespace vtex::primitive {
 
 /// The n-point Gauss–Legendre rule on [-1, 1]: exact for polynomials of degree 2n − 1.
 struct QuadratureRule {
@@ -16,4 +16,4 @@ struct QuadratureRule {
 /// accurate to a few ulps for n up to several thousand. n ≥ 1.
 QuadratureRule gaussLegendre(int n);
 
-}  // namespace vtex::octree
+}  // namespace vtex::primitive

@@ -1,7 +1,7 @@
 // The micro-primitive of Neyret 1994 §3.1–3.3.2 and its SGGX parameterisation (Heitz et al.
 // 2015, §4). See DESIGN.md, "The micro-primitive".
-#include <vtex/octree/ellipsoid.h>
-#include <vtex/octree/quadrature.h>
+#include <vtex/primitive/ellipsoid.h>
+#include <vtex/primitive/quadrature.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace vtex::octree {
+namespace vtex::primitive {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -138,7 +138,7 @@ void Ellipsoid::cacheForms() {
     const auto unique = [](const Mat3& m) {
         return std::array<double, 6>{m(0, 0), m(1, 1), m(2, 2), m(0, 1), m(0, 2), m(1, 2)};
     };
-    mS = unique(S());
+    mS = SggxMatrix::fromUpper(S());
     mM = unique(M());
 }
 
@@ -263,9 +263,10 @@ Ellipsoid Ellipsoid::scaled(double factor) const {
     copy.mSemiAxes *= factor;
     copy.mDetM *= areaFactor * areaFactor * areaFactor;
     copy.mExactMeanArea *= areaFactor;
-    for (double& s : copy.mS) s *= areaFactor * areaFactor;
+    for (double* s : {&copy.mS.xx, &copy.mS.yy, &copy.mS.zz, &copy.mS.xy, &copy.mS.xz, &copy.mS.yz})
+        *s *= areaFactor * areaFactor;
     for (double& m : copy.mM) m *= areaFactor;
     return copy;
 }
 
-}  // namespace vtex::octree
+}  // namespace vtex::primitive

@@ -1,11 +1,11 @@
-#include <vtex/octree/quadrature.h>
+#include <vtex/primitive/quadrature.h>
 
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <utility>
 
-namespace vtex::octree {
+namespace vtex::primitive {
 namespace {
 
 // P_n(x) and P_{n-1}(x) by the three-term recurrence.
@@ -47,4 +47,4 @@ QuadratureRule gaussLegendre(int n) {
     return rule;
 }
 
-}  // namespace vtex::octree
+}  // namespace vtex::primitive

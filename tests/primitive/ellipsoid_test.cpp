@@ -1,11 +1,11 @@
 // The micro-primitive's maths (DESIGN.md, "The micro-primitive"), each checked against an
 // independent computation: quadrature of the normal distribution against the closed-form
 // area and projected area, the SGGX formulas against Neyret's quadratic form, fits against
-// the shapes their normals came from.
+// the shapes their normals came from (the fits' projected-area error: tests/octree/fit_test.cpp).
 #include "shapes.h"
 
-#include <vtex/octree/ellipsoid.h>
-#include <vtex/octree/filtering.h>
+#include <vtex/primitive/ellipsoid.h>
+#include <vtex/primitive/quadrature.h>
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@
 #include <random>
 #include <numbers>
 
-namespace vtex::octree {
+namespace vtex::primitive {
 namespace {
 
 using test::integrateOverSurface;
@@ -22,6 +22,7 @@ using test::integrateSphere;
 using test::parametricSurfaceArea;
 using test::randomDirection;
 using test::randomRotation;
+using test::sampleSurfaceNormals;
 using test::standardShapes;
 
 constexpr double kPi = std::numbers::pi;
@@ -190,67 +191,6 @@ TEST(Ellipsoid, SemiAxesFollowFromSigmaAsTheDesignStates) {
     EXPECT_TRUE(e->semiAxes().isApprox(expected, 1e-12)) << e->semiAxes().transpose();
 }
 
-// Normals of the surface of `e` with their areas: the Gauss–Legendre grid of the parametric
-// sphere u pushed through x = L u.
-void sampleSurfaceNormals(const Ellipsoid& e, int rings, std::vector<Vec3>& normals,
-                          std::vector<double>& areas) {
-    const Vec3& a = e.semiAxes();
-    const QuadratureRule rule = gaussLegendre(rings);
-    for (int i = 0; i < rings; ++i) {
-        const double z = rule.nodes[i], r = std::sqrt(1 - z * z);
-        for (int j = 0; j < 2 * rings; ++j) {
-            const double phi = kPi * (j + 0.5) / rings;
-            const Vec3 scaled = a.cwiseInverse().cwiseProduct(Vec3(r * std::cos(phi), r * std::sin(phi), z));
-            normals.push_back(e.basis() * scaled.normalized());
-            areas.push_back(rule.weights[i] * a.prod() * scaled.norm());
-        }
-    }
-}
-
-TEST(Ellipsoid, TwoStepFitRecoversAnEllipsoidFromItsSurfaceNormals) {
-    std::mt19937 rng(5);
-    for (const auto& [name, e] : standardShapes()) {
-        std::vector<Vec3> normals;
-        std::vector<double> areas;
-        sampleSurfaceNormals(e, 200, normals, areas);
-        const auto fit = Ellipsoid::fitNormals(normals, areas);
-        ASSERT_TRUE(fit) << name;
-        EXPECT_TRUE(fit->normalized().M().isApprox(e.normalized().M(), 2e-3))
-            << name << "\nfit axes " << fit->semiAxes().transpose() << "\ntrue axes "
-            << e.semiAxes().transpose();
-        EXPECT_LT(fitError(*fit, normals, areas), 1e-3) << name;
-    }
-}
-
-TEST(Ellipsoid, TwoStepFitRecoversADiscAndAFibre) {
-    std::mt19937 rng(6);
-    const Mat3 R = randomRotation(rng);
-    // A flat square: every facet has the normal R·z (either sign).
-    std::vector<Vec3> normals = {R.col(2), -R.col(2), R.col(2)};
-    std::vector<double> areas = {0.5, 0.25, 0.25};
-    auto disc = Ellipsoid::fitNormals(normals, areas);
-    ASSERT_TRUE(disc);
-    EXPECT_NEAR(std::abs(disc->basis().col(0).dot(R.col(2))), 1.0, 1e-12) << "short axis = normal";
-    EXPECT_NEAR(disc->semiAxes()[0] / disc->semiAxes()[2], kMinAxisRatio, 1e-12);
-    EXPECT_NEAR(disc->semiAxes()[1], disc->semiAxes()[2], 1e-12);
-    EXPECT_LT(fitError(*disc, normals, areas), 1e-3);
-
-    // The side of a cylinder along R·x: normals all around the axis, equal areas.
-    normals.clear();
-    areas.clear();
-    for (int k = 0; k < 360; ++k) {
-        const double t = 2 * kPi * k / 360;
-        normals.push_back(std::cos(t) * R.col(1) + std::sin(t) * R.col(2));
-        areas.push_back(1.0);
-    }
-    auto fibre = Ellipsoid::fitNormals(normals, areas);
-    ASSERT_TRUE(fibre);
-    EXPECT_NEAR(std::abs(fibre->basis().col(2).dot(R.col(0))), 1.0, 1e-9) << "long axis = cylinder axis";
-    EXPECT_NEAR(fibre->semiAxes()[0] / fibre->semiAxes()[2], kMinAxisRatio, 1e-9);
-    EXPECT_NEAR(fibre->semiAxes()[0], fibre->semiAxes()[1], 1e-9);
-    EXPECT_LT(fitError(*fibre, normals, areas), 1e-3);
-}
-
 TEST(Ellipsoid, TheRawSecondMomentIsNotProportionalToS) {
     // The design's counter-example: semi-axes (1, 0.5, 0.2). The second moment's normalised
     // diagonal is (0.074, 0.244, 1) while σ² ∝ (0.04, 0.16, 1): the two-step fit must not
@@ -325,4 +265,4 @@ TEST(Ellipsoid, ExtremeShapesStayFinite) {
 }
 
 }  // namespace
-}  // namespace vtex::octree
+}  // namespace vtex::primitive

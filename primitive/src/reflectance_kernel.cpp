@@ -1,8 +1,6 @@
-// Micro-primitive reflectance (see shading.h). The fast path evaluates the SGGX visible-normal
-// distribution with the closed-form sampler of Heitz et al. 2015 (Listing 3) on a fixed lattice.
-#include <vtex/render/shading.h>
-
-#include <vtex/octree/voxel.h>
+// The fast micro-primitive reflectance (see reflectance_kernel.h): the SGGX visible-normal
+// distribution through the closed-form sampler of Heitz et al. 2015 (Listing 3) on a fixed lattice.
+#include <vtex/primitive/reflectance_kernel.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,30 +11,9 @@
 #include <emmintrin.h>
 #endif
 
-namespace vtex::render {
+namespace vtex::primitive {
 
 using Eigen::Vector3d;
-
-octree::ReflectanceFactors reflectanceReference(const SggxMatrix& s, const Vector3d& light,
-                                                const Vector3d& view, double shininess, int samplesPerAxis) {
-    octree::Mat3 m;
-    m << s.xx, s.xy, s.xz, s.xy, s.yy, s.yz, s.xz, s.yz, s.zz;
-    const auto ellipsoid = octree::Ellipsoid::fromS(m);
-    if (!ellipsoid) return {};
-    return octree::phongReflectanceApparentEllipse(*ellipsoid, light, view, shininess, samplesPerAxis);
-}
-
-SggxMatrix voxelS(const octree::VoxelData& voxel) {
-    // Rotation matrix of the unit quaternion (x, y, z, w), then S = R diag(σ²) Rᵀ.
-    const double x = voxel.rotation[0], y = voxel.rotation[1], z = voxel.rotation[2], w = voxel.rotation[3];
-    const double r[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
-                            {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
-                            {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
-    const double s2[3] = {double(voxel.sigma[0]) * voxel.sigma[0], double(voxel.sigma[1]) * voxel.sigma[1],
-                          double(voxel.sigma[2]) * voxel.sigma[2]};
-    const auto entry = [&](int i, int j) { return r[i][0] * s2[0] * r[j][0] + r[i][1] * s2[1] * r[j][1] + r[i][2] * s2[2] * r[j][2]; };
-    return {entry(0, 0), entry(1, 1), entry(2, 2), entry(0, 1), entry(0, 2), entry(1, 2)};
-}
 
 // Fixed points on the unit disc: a Fibonacci lattice, radius √((i+½)/n) for equal areas. Kept
 // in single precision for the 4-wide loop below (n is a multiple of 4).
@@ -102,7 +79,7 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
     mSpecularScale = (shininess + 2) / (2 * std::numbers::pi) / mLattice->n;
 }
 
-octree::ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
+ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
     const double entries[6] = {s.xx, s.yy, s.zz, s.xy, s.xz, s.yz};
     alignas(16) double t[6] = {};
 #if defined(__SSE2__)
@@ -224,9 +201,8 @@ octree::ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) co
     return {diffuse * mDiffuseScale, specular * mSpecularScale};
 }
 
-octree::ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light,
-                                           const Vector3d& view, double shininess, int samples) {
+ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light, const Vector3d& view, double shininess, int samples) {
     return ReflectanceKernel(light, view, shininess, samples)(s);
 }
 
-}  // namespace vtex::render
+}  // namespace vtex::primitive

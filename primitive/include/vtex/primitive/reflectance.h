@@ -7,12 +7,14 @@
 /// ρ = kd/π + ks (n+2)/(2π) cosⁿα, α the angle between v and the mirror direction of l about
 /// N. The ellipsoid is convex, so a facet is visible iff N·v > 0 and lit iff N·l > 0: a disc
 /// lit on one face and seen from the other is black. R is linear in kd and ks, so both
-/// methods return the two factors and the caller multiplies its colours in.
+/// methods return the two factors and the caller multiplies its colours in. The fast method the
+/// renderer uses by default is in reflectance_kernel.h.
 #pragma once
 
-#include <vtex/octree/ellipsoid.h>
+#include <vtex/primitive/ellipsoid.h>
+#include <vtex/primitive/sggx.h>
 
-namespace vtex::octree {
+namespace vtex::primitive {
 
 /// R(l, v) = kd · diffuse + ks · specular.
 struct ReflectanceFactors {
@@ -38,4 +40,10 @@ ReflectanceFactors phongReflectanceNormalQuadrature(const Ellipsoid& ellipsoid, 
                                                     const Vec3& view, double shininess,
                                                     int rings = 128);
 
-}  // namespace vtex::octree
+/// The paper's method on the ellipsoid of an SGGX matrix S (any scale; Ellipsoid::fromS):
+/// phongReflectanceApparentEllipse with `samplesPerAxis` grid cells per axis of the apparent
+/// ellipse; zero factors for an S with no positive eigenvalue. The renderer's --shading reference.
+ReflectanceFactors reflectanceReference(const SggxMatrix& s, const Vec3& light, const Vec3& view, double shininess,
+                                        int samplesPerAxis = 24);
+
+}  // namespace vtex::primitive

@@ -3,13 +3,13 @@
 // form for a Lambertian sphere, and with energy conservation.
 #include "shapes.h"
 
-#include <vtex/octree/reflectance.h>
+#include <vtex/primitive/reflectance.h>
 
 #include <gtest/gtest.h>
 
 #include <numbers>
 
-namespace vtex::octree {
+namespace vtex::primitive {
 namespace {
 
 using test::integrateSphere;
@@ -135,4 +135,4 @@ TEST(Reflectance, GrazingAndAxialDirectionsOnNeedlesAndDiscsStayFinite) {
 }
 
 }  // namespace
-}  // namespace vtex::octree
+}  // namespace vtex::primitive

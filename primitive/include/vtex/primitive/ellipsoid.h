@@ -14,6 +14,8 @@
 /// below stays finite.
 #pragma once
 
+#include <vtex/primitive/sggx.h>
+
 #include <Eigen/Core>
 
 #include <algorithm>
@@ -22,10 +24,7 @@
 #include <optional>
 #include <span>
 
-namespace vtex::octree {
-
-using Vec3 = Eigen::Vector3d;
-using Mat3 = Eigen::Matrix3d;
+namespace vtex::primitive {
 
 /// The smallest ratio of shortest to longest semi-axis that an Ellipsoid keeps. A flat leaf
 /// (ratio 0) becomes a disc 1e-4 thick, a hair a needle 1e4 times as long as it is wide. At
@@ -97,14 +96,9 @@ public:
 
     /// A(ω) = π √(det M · ωᵀ M⁻¹ ω) = √(ωᵀSω): the area of the shadow cast along the unit
     /// direction ω (either sign); equals ½ ∫ |ω·N| f(N) dN.
-    double projectedArea(const Vec3& direction) const {
-        // The quadratic form of S written out on its six unique entries: this runs per voxel
-        // per ray step, and the explicit form is half the work of rotating ω into the frame.
-        const double x = direction.x(), y = direction.y(), z = direction.z();
-        const double quadratic = mS[0] * x * x + mS[1] * y * y + mS[2] * z * z +
-                                 2 * (mS[3] * x * y + mS[4] * x * z + mS[5] * y * z);
-        return std::sqrt(std::max(quadratic, 0.0));
-    }
+    double projectedArea(const Vec3& direction) const { return mS.projectedArea(direction); }
+    /// S's six unique entries (the SGGX form every stage shares).
+    const SggxMatrix& sggx() const { return mS; }
 
     /// Surface area, stable over the whole range of shapes (elliptic integrals where they
     /// keep their digits, sphere quadrature of A(ω) near a sphere, where their closed form
@@ -143,13 +137,12 @@ private:
 
     Mat3 mBasis;
     Vec3 mSemiAxes;
-    // The unique entries (xx, yy, zz, xy, xz, yz) of S = R diag(σ²) Rᵀ, σᵢ = π aⱼaₖ, and of
-    // M = R diag(a²) Rᵀ, for the two functions above. S's eigenvalues are ≥ 0 but rounding
-    // can push ωᵀSω a few ulps below zero along a needle's axis: hence the max above.
-    std::array<double, 6> mS;
+    // S = R diag(σ²) Rᵀ, σᵢ = π aⱼaₖ, and the unique entries (xx, yy, zz, xy, xz, yz) of
+    // M = R diag(a²) Rᵀ, for the two functions above.
+    SggxMatrix mS;
     std::array<double, 6> mM;
     double mDetM;        // (a₁a₂a₃)²
     double mExactMeanArea;  // surfaceArea()/4, computed once: it costs elliptic integrals
 };
 
-}  // namespace vtex::octree
+}  // namespace vtex::primitive
