@@ -78,6 +78,7 @@ double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const 
 
 void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b,
                            const std::function<void(const Octree::Found&, double, double)>& visit) {
+    tree.loadLevels(level);  // a tree opened with openVto reads the level now if need be
     const double n = double(std::uint64_t(1) << level);
     const Vec3 delta = b - a;
     const double length = delta.norm();
