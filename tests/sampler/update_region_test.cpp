@@ -2,7 +2,10 @@
 // a full re-sampling bit for bit, fit error included; earlier volumes sampled otherwise refused.
 #include "meshes.h"
 
+#include "run_vtex.h"
+
 #include <vtex/core/error.h>
+#include <vtex/ingest/ingest.h>
 #include <vtex/octree/octree.h>
 #include <vtex/sampler/patterns.h>
 #include <vtex/sampler/sampler.h>
@@ -11,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 namespace vtex::sampler {
 namespace {
@@ -134,6 +138,58 @@ TEST(UpdateRegion, AnEarlierVolumeSampledOtherwiseIsRefusedNamingIt) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("solid interior"), std::string::npos) << e.what();
     }
+}
+
+// The same through the command line: `vtex sample --update OLD.vtl --region …` writes the bytes
+// a full `vtex sample` writes, and `vtex build` of it the same .vto; bad regions are bad usage
+// naming the flag, and nothing is written by a refused update.
+TEST(UpdateRegionCli, SampleUpdateWritesTheFullSamplingsBytes) {
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::path(VTEX_TEST_TMP) / "update_region";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const auto bush = makePattern("bush", {});
+    const Edit edit = moveLeaves(bush, 20, Eigen::Vector3f(0.5f, 0.55f, 0.9f), Eigen::Vector3f(0.004f, -0.003f, 0.002f), 64);
+    ingest::writeMeshGlb(bush, dir / "old.glb");
+    ingest::writeMeshGlb(edit.mesh, dir / "new.glb");
+    const auto path = [&](const char* name) { return (dir / name).string(); };
+    const auto run = [](std::vector<std::string> args) {
+        const auto r = vtex::test::runVtex(args);
+        EXPECT_EQ(r.exitStatus, 0) << r.err;
+        return r;
+    };
+    run({"sample", path("old.glb"), "-o", path("old.vtl"), "-r", "64", "-q"});
+    run({"sample", path("new.glb"), "-o", path("full.vtl"), "-r", "64", "-q"});
+    std::string region;
+    for (const auto& v : {edit.region.min, edit.region.max})
+        for (const auto c : v) {
+            if (!region.empty()) region.push_back(',');
+            region.append(std::to_string(c));
+        }
+    run({"sample", path("new.glb"), "-o", path("updated.vtl"), "--update", path("old.vtl"), "--region", region, "-q"});
+    EXPECT_EQ(vtex::test::readText(dir / "updated.vtl"), vtex::test::readText(dir / "full.vtl"));
+    EXPECT_NE(vtex::test::readText(dir / "old.vtl"), vtex::test::readText(dir / "full.vtl"));
+    run({"build", path("full.vtl"), "-o", path("full.vto"), "-q"});
+    run({"build", path("updated.vtl"), "-o", path("updated.vto"), "-q"});
+    EXPECT_EQ(vtex::test::readText(dir / "updated.vto"), vtex::test::readText(dir / "full.vto"));
+
+    for (const std::string bad : {"0,0,0,65,1,1", "3,0,0,3,1,1", "1,2,3", "1,2,3,4,5,x", "-1,0,0,2,2,2"}) {
+        const auto r = vtex::test::runVtex({"sample", path("new.glb"), "-o", path("bad.vtl"), "--update", path("old.vtl"),
+                                      "--region", bad});
+        EXPECT_EQ(r.exitStatus, 2) << bad << ": " << r.err;
+        EXPECT_NE(r.err.find("--region"), std::string::npos) << r.err;
+    }
+    const auto alone = vtex::test::runVtex({"sample", path("new.glb"), "-o", path("bad.vtl"), "--region", region});
+    EXPECT_EQ(alone.exitStatus, 2) << alone.err;
+    const auto other = vtex::test::runVtex({"sample", path("new.glb"), "-o", path("bad.vtl"), "--update", path("old.vtl"),
+                                      "--region", "0,0,0,8,8,8", "-r", "32"});
+    EXPECT_EQ(other.exitStatus, 3) << other.err;
+    EXPECT_NE(other.err.find("old.vtl"), std::string::npos) << other.err;
+    EXPECT_FALSE(fs::exists(dir / "bad.vtl"));
+    const auto inPlace = vtex::test::runVtex({"sample", path("new.glb"), "-o", path("old.vtl"), "--update", path("old.vtl"),
+                                        "--region", region});
+    EXPECT_EQ(inPlace.exitStatus, 3) << inPlace.err;
+    EXPECT_NE(vtex::test::readText(dir / "old.vtl"), vtex::test::readText(dir / "full.vtl"));  // left as it was
 }
 
 }  // namespace
