@@ -7,6 +7,7 @@
 #include <vtex/sampler/sampler.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
 #include <string>
@@ -78,7 +79,93 @@ void checkCompatible(const octree::SparseVolume& old, const octree::SparseVolume
         throw InputError(oldFile, "has a solid interior, which a partial update does not classify again: re-sample in full");
 }
 
+// Everything of a triangle that the sampling reads: its corners, their texture coordinates and its
+// material (the materials and textures themselves are compared whole).
+bool sameTriangle(const ingest::TriangleMesh& a, std::size_t i, const ingest::TriangleMesh& b, std::size_t j) {
+    const std::uint32_t ma = a.triangleMaterials.empty() ? 0 : a.triangleMaterials[i];
+    const std::uint32_t mb = b.triangleMaterials.empty() ? 0 : b.triangleMaterials[j];
+    if (ma != mb) return false;
+    const bool uvs = a.uvs.size() == a.positions.size();
+    for (int k = 0; k < 3; ++k) {
+        const std::uint32_t u = a.triangles[i][std::size_t(k)], v = b.triangles[j][std::size_t(k)];
+        if (a.positions[u] != b.positions[v] || (uvs && a.uvs[u] != b.uvs[v])) return false;
+    }
+    return true;
+}
+
+bool sameLooks(const ingest::TriangleMesh& a, const ingest::TriangleMesh& b) {
+    const auto sameMaterial = [](const ingest::Material& x, const ingest::Material& y) {
+        return x.baseColorFactor == y.baseColorFactor && x.baseColorTexture == y.baseColorTexture;
+    };
+    const auto sameImage = [](const ingest::Image& x, const ingest::Image& y) {
+        return x.width == y.width && x.height == y.height && x.rgba == y.rgba;
+    };
+    return (a.uvs.size() == a.positions.size()) == (b.uvs.size() == b.positions.size()) &&
+           std::equal(a.materials.begin(), a.materials.end(), b.materials.begin(), b.materials.end(), sameMaterial) &&
+           std::equal(a.textures.begin(), a.textures.end(), b.textures.begin(), b.textures.end(), sameImage);
+}
+
+// Grows [lo, hi] (voxel units) by triangle t of `mesh` under the mapping.
+void growBounds(const ingest::TriangleMesh& mesh, std::size_t t, double scale, const std::array<double, 3>& offset,
+                double n, Vec3& lo, Vec3& hi) {
+    for (const std::uint32_t v : mesh.triangles[t]) {
+        if (v >= mesh.positions.size()) continue;  // sampleMesh refuses the mesh
+        for (int a = 0; a < 3; ++a) {
+            const double p = (double(mesh.positions[v][a]) * scale + offset[std::size_t(a)]) * n;
+            lo[a] = std::min(lo[a], p);
+            hi[a] = std::max(hi[a], p);
+        }
+    }
+}
+
 }  // namespace
+
+std::optional<octree::VoxelBox> changedRegion(const ingest::TriangleMesh& before, const ingest::TriangleMesh& after,
+                                              const SampleOptions& options) {
+    double scaleBefore, scaleAfter;
+    std::array<double, 3> offsetBefore, offsetAfter;
+    referenceMapping(before, options.bounds, scaleBefore, offsetBefore);
+    referenceMapping(after, options.bounds, scaleAfter, offsetAfter);
+    if (scaleBefore != scaleAfter || offsetBefore != offsetAfter || !sameLooks(before, after)) return std::nullopt;
+    // The triangles that differ: index by index when the counts agree (an edit that moves
+    // vertices), else all but the common prefix and suffix (one block inserted or removed). Either
+    // way the others keep their order, so every voxel they alone touch sums the same pieces in
+    // the same order.
+    const std::size_t nb = before.triangles.size(), na = after.triangles.size();
+    std::vector<std::size_t> changedBefore, changedAfter;
+    if (nb == na) {
+        for (std::size_t t = 0; t < nb; ++t)
+            if (!sameTriangle(before, t, after, t)) {
+                changedBefore.push_back(t);
+                changedAfter.push_back(t);
+            }
+    } else {
+        std::size_t prefix = 0, suffix = 0;
+        while (prefix < std::min(nb, na) && sameTriangle(before, prefix, after, prefix)) ++prefix;
+        while (suffix < std::min(nb, na) - prefix && sameTriangle(before, nb - 1 - suffix, after, na - 1 - suffix)) ++suffix;
+        for (std::size_t t = prefix; t < nb - suffix; ++t) changedBefore.push_back(t);
+        for (std::size_t t = prefix; t < na - suffix; ++t) changedAfter.push_back(t);
+    }
+    const std::uint32_t n = options.resolution;
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    for (const std::size_t t : changedBefore) growBounds(before, t, scaleBefore, offsetBefore, double(n), lo, hi);
+    for (const std::size_t t : changedAfter) growBounds(after, t, scaleAfter, offsetAfter, double(n), lo, hi);
+    octree::VoxelBox box;
+    if (changedBefore.empty() && changedAfter.empty()) return box;
+    for (int a = 0; a < 3; ++a) {
+        // Voxel v holds a piece of a triangle only if v ≤ its upper bound and v + 1 ≥ its lower
+        // bound; a cyclic texel wraps pieces beyond [0, N) in x and y to the far side.
+        const bool wraps = options.cyclic && a < 2 && (lo[a] < 0 || hi[a] >= double(n));
+        if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || wraps) {
+            box.min[std::size_t(a)] = 0;
+            box.max[std::size_t(a)] = n;
+            continue;
+        }
+        box.min[std::size_t(a)] = std::uint32_t(std::clamp(std::floor(lo[a]) - 1, 0.0, double(n)));
+        box.max[std::size_t(a)] = std::uint32_t(std::clamp(std::floor(hi[a]) + 1, 0.0, double(n)));
+    }
+    return box;
+}
 
 octree::SparseVolume updateRegion(const ingest::TriangleMesh& mesh, const octree::SparseVolume& old,
                                   const SampleOptions& options, const std::filesystem::path& oldFile, Progress& progress) {

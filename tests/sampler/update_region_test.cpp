@@ -140,6 +140,52 @@ TEST(UpdateRegion, AnEarlierVolumeSampledOtherwiseIsRefusedNamingIt) {
     }
 }
 
+// changedRegion finds the region from the two meshes alone: for moved leaves the one the test
+// derives from the leaves it moved; for leaves added or removed one that updateRegion turns into
+// the full sampling's bytes; none when the look of the triangles changed.
+TEST(UpdateRegion, TheChangedRegionOfTwoMeshesGivesTheFullSampling) {
+    const auto bush = makePattern("bush", {});
+    NullProgress progress;
+    const std::uint32_t n = 64;
+    const Edit moved = moveLeaves(bush, 20, Eigen::Vector3f(0.5f, 0.55f, 0.9f), Eigen::Vector3f(0.004f, -0.003f, 0.002f), n);
+    EXPECT_EQ(changedRegion(bush, moved.mesh, optionsFor(n)), moved.region);
+    EXPECT_EQ(changedRegion(bush, bush, optionsFor(n)), octree::VoxelBox{});
+    // 20 leaves fewer from the middle of the list (their triangles too), and 20 more at its end.
+    ingest::TriangleMesh fewer = bush, more = bush;
+    const auto middle = fewer.triangles.begin() + 8 * 1000;
+    fewer.triangles.erase(middle, middle + 8 * 20);
+    fewer.triangleMaterials.erase(fewer.triangleMaterials.begin() + 8 * 1000, fewer.triangleMaterials.begin() + 8 * 1020);
+    for (std::size_t t = 0; t < 8 * 20; ++t) {
+        more.triangles.push_back(bush.triangles[t]);
+        for (auto& v : more.triangles.back()) {
+            more.positions.push_back(bush.positions[v] + Eigen::Vector3f(0.01f, 0.0f, 0.0f));
+            more.normals.push_back(bush.normals[v]);
+            if (!bush.uvs.empty()) more.uvs.push_back(bush.uvs[v]);
+            v = std::uint32_t(more.positions.size() - 1);
+        }
+        more.triangleMaterials.push_back(bush.triangleMaterials[t]);
+    }
+    const auto before = sampleMesh(bush, optionsFor(n), progress);
+    const std::vector<const ingest::TriangleMesh*> edits{&moved.mesh, &fewer, &more};
+    for (const ingest::TriangleMesh* edited : edits) {
+        const auto region = changedRegion(bush, *edited, optionsFor(n));
+        ASSERT_TRUE(region.has_value());
+        EXPECT_FALSE(region->isEmpty());
+        SampleOptions options = optionsFor(n);
+        options.region = region;
+        const auto full = sampleMesh(*edited, optionsFor(n), progress);
+        EXPECT_EQ(octree::serializeVtl(updateRegion(*edited, before, options, "before.vtl", progress)),
+                  octree::serializeVtl(full));
+    }
+    ingest::TriangleMesh recoloured = bush;
+    recoloured.materials[0].baseColorFactor.x() *= 0.5f;
+    EXPECT_FALSE(changedRegion(bush, recoloured, optionsFor(n)).has_value());
+    ingest::TriangleMesh grown = bush;
+    grown.positions[0] += Eigen::Vector3f(0.5f, 0.5f, 0.5f);  // out of the unit cube: fitted again
+    SampleOptions fit = optionsFor(n);
+    EXPECT_FALSE(changedRegion(bush, grown, fit).has_value());
+}
+
 // The same through the command line: `vtex sample --update OLD.vtl --region …` writes the bytes
 // a full `vtex sample` writes, and `vtex build` of it the same .vto; bad regions are bad usage
 // naming the flag, and nothing is written by a refused update.

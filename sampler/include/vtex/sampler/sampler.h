@@ -84,4 +84,13 @@ octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOp
 octree::SparseVolume updateRegion(const ingest::TriangleMesh& mesh, const octree::SparseVolume& old,
                                   const SampleOptions& options, const std::filesystem::path& oldFile, Progress& progress);
 
+/// The region updateRegion needs for an edit from `before` to `after` (sampled with `options`,
+/// its region ignored): every voxel a triangle that differs touches, in either mesh. Triangles
+/// are compared by what the sampling reads of them (corners, texture coordinates, material) index
+/// by index when the counts agree, else outside their common prefix and suffix. An empty box when
+/// nothing differs; std::nullopt when no region will do: the mapping to the unit cube, a material
+/// or a texture changed (or the texture coordinates appeared or went).
+std::optional<octree::VoxelBox> changedRegion(const ingest::TriangleMesh& before, const ingest::TriangleMesh& after,
+                                              const SampleOptions& options);
+
 }  // namespace vtex::sampler
