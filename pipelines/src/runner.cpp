@@ -21,6 +21,7 @@
 
 #include "content_hash.h"
 #include "memory_monitor.h"
+#include "partial_sample.h"
 #include "report.h"
 
 #include <nlohmann/json.hpp>
@@ -254,18 +255,23 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         Stage sample{"sample", step.name};
         sample.inputs = {sourceIndex.at(step.source)};
         sample.outputs["volume"] = root / "samples" / (step.name + ".vtl");
+        // The mesh the volume was sampled from, for the next run to find what changed.
+        sample.outputs["sampled_mesh"] = root / "samples" / (step.name + ".mesh.glb");
         sampleIndex[step.name] = stages.size();
         stages.push_back(std::move(sample));
         Stage& s = stages.back();
         const std::size_t sourceStage = s.inputs[0];
-        s.describe = [&stages, step, cyclic, sourceStage, sampledResolution, header] {
-            std::ostringstream d;
-            d << header << "sample\nresolution " << sampledResolution << " cyclic " << cyclic << " solid " << step.solid
-              << "\nmesh " << stages[sourceStage].outputHashes.at("mesh") << "\n";
-            return d.str();
+        std::ostringstream parameters;
+        parameters << header << "sample\nresolution " << sampledResolution << " cyclic " << cyclic << " solid " << step.solid
+                   << "\n";
+        s.describe = [&stages, sourceStage, parameters = parameters.str()] {
+            return parameters + "mesh " + stages[sourceStage].outputHashes.at("mesh") + "\n";
         };
-        s.run = [&stages, &budget, step, cyclic, sourceStage, sampledResolution](Stage& self) {
+        const detail::EarlierSample earlier{manifestPath(s, root), s.outputs.at("volume"), s.outputs.at("sampled_mesh"),
+                                            parameters.str()};
+        s.run = [&stages, &budget, step, cyclic, sourceStage, sampledResolution, earlier, force = options.force](Stage& self) {
             const fs::path meshFile = stages[sourceStage].outputs.at("mesh");
+            const std::string meshBytes = readText(meshFile);
             const ingest::TriangleMesh mesh = ingest::loadMesh(meshFile);
             sampler::SampleOptions o;
             o.resolution = sampledResolution;
@@ -276,13 +282,26 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             const auto held = budget.reserve(meshFile, "sampling at " + std::to_string(sampledResolution) + "^3",
                                              sampler::estimateSampleMemory(mesh, o));
             NullProgress quiet;
-            const octree::SparseVolume volume = sampler::sampleMesh(mesh, o, quiet);
-            octree::writeVtl(volume, self.outputs.at("volume"));
+            // An edited source is re-sampled only where its triangles changed (not with --force).
+            const detail::SampleResult sampled = force ? detail::SampleResult{sampler::sampleMesh(mesh, o, quiet), std::nullopt}
+                                                       : detail::sampleOrUpdate(mesh, o, earlier, quiet);
+            const octree::SparseVolume& volume = sampled.volume;
+            // Both or neither: a copy of another mesh beside the volume would mislead the next run.
+            AtomicOutputFile vtl(self.outputs.at("volume")), copy(self.outputs.at("sampled_mesh"));
+            vtl.stream() << octree::serializeVtl(volume);
+            copy.stream() << meshBytes;
+            commitAll({&vtl, &copy});
+            Json region = nullptr;
+            if (sampled.region)
+                region = {sampled.region->min[0], sampled.region->min[1], sampled.region->min[2],
+                          sampled.region->max[0], sampled.region->max[1], sampled.region->max[2]};
             return Json{{"resolution", sampledResolution},
                         {"maximum_resolution", step.resolution},
                         {"occupied_blocks", volume.blocks.size()},
                         {"source_area", volume.info.sourceArea},
-                        {"fit_error_mean", volume.info.fitError.mean}};
+                        {"fit_error_mean", volume.info.fitError.mean},
+                        {"parameters", earlier.parameters},
+                        {"updated_region", region}};
         };
     }
 
