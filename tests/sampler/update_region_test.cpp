@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 namespace vtex::sampler {
 namespace {
@@ -187,8 +188,8 @@ TEST(UpdateRegion, TheChangedRegionOfTwoMeshesGivesTheFullSampling) {
 }
 
 // The same through the command line: `vtex sample --update OLD.vtl --region …` writes the bytes
-// a full `vtex sample` writes, and `vtex build` of it the same .vto; bad regions are bad usage
-// naming the flag, and nothing is written by a refused update.
+// a full `vtex sample` writes, and `vtex build` of it, in full or `--update OLD.vto`, the same
+// .vto; bad regions are bad usage naming the flag, and nothing is written by a refused update.
 TEST(UpdateRegionCli, SampleUpdateWritesTheFullSamplingsBytes) {
     namespace fs = std::filesystem;
     const fs::path dir = fs::path(VTEX_TEST_TMP) / "update_region";
@@ -218,6 +219,28 @@ TEST(UpdateRegionCli, SampleUpdateWritesTheFullSamplingsBytes) {
     run({"build", path("full.vtl"), "-o", path("full.vto"), "-q"});
     run({"build", path("updated.vtl"), "-o", path("updated.vto"), "-q"});
     EXPECT_EQ(vtex::test::readText(dir / "updated.vto"), vtex::test::readText(dir / "full.vto"));
+    // `vtex build --update`: the earlier octree's builder resumed, the region filtered again.
+    run({"build", path("old.vtl"), "-o", path("old.vto"), "-q"});
+    const auto rebuilt = run({"build", path("updated.vtl"), "-o", path("rebuilt.vto"), "--update", path("old.vto"),
+                              "--region", region});
+    EXPECT_NE(rebuilt.err.find("updated"), std::string::npos) << rebuilt.err;
+    EXPECT_EQ(vtex::test::readText(dir / "rebuilt.vto"), vtex::test::readText(dir / "full.vto"));
+    const auto otherFilter = vtex::test::runVtex({"build", path("updated.vtl"), "-o", path("bad.vto"), "--update",
+                                                  path("old.vto"), "--region", region, "--filter", "neyret"});
+    EXPECT_EQ(otherFilter.exitStatus, 3) << otherFilter.err;
+    EXPECT_NE(otherFilter.err.find("old.vto"), std::string::npos) << otherFilter.err;
+    const auto badRegion = vtex::test::runVtex({"build", path("updated.vtl"), "-o", path("bad.vto"), "--update",
+                                                path("old.vto"), "--region", "0,0,0,65,1,1"});
+    EXPECT_EQ(badRegion.exitStatus, 2) << badRegion.err;
+    EXPECT_NE(badRegion.err.find("--region"), std::string::npos) << badRegion.err;
+    // The earlier octree is read whole and checked: a damaged level no region needs still fails.
+    std::string damaged = vtex::test::readText(dir / "old.vto");
+    damaged[damaged.size() - 5] = char(damaged[damaged.size() - 5] ^ 0x01);
+    std::ofstream(dir / "old.vto", std::ios::binary | std::ios::trunc) << damaged;
+    const auto corrupt = vtex::test::runVtex({"build", path("updated.vtl"), "-o", path("bad.vto"), "--update",
+                                              path("old.vto"), "--region", region});
+    EXPECT_EQ(corrupt.exitStatus, 3) << corrupt.err;
+    EXPECT_FALSE(fs::exists(dir / "bad.vto"));
 
     for (const std::string bad : {"0,0,0,65,1,1", "3,0,0,3,1,1", "1,2,3", "1,2,3,4,5,x", "-1,0,0,2,2,2"}) {
         const auto r = vtex::test::runVtex({"sample", path("new.glb"), "-o", path("bad.vtl"), "--update", path("old.vtl"),

@@ -137,6 +137,12 @@ struct BuildOptions {
 class OctreeBuilder {
 public:
     OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress);
+    /// The builder that made `tree`, rebuilt from the tree alone, as if from a finest level with
+    /// `info` (`vtex build --update`): possible when the tree stores every node of its pyramid —
+    /// no node above the finest level merged, as a surface built with tolerance 0 leaves it —
+    /// and no solid block; std::nullopt otherwise. `options` must hold the tree's rule and
+    /// tolerance. updateRegion then compress() give the full build's tree bit for bit.
+    static std::optional<OctreeBuilder> resume(const Octree& tree, const VolumeInfo& info, const BuildOptions& options);
     ~OctreeBuilder();
     OctreeBuilder(OctreeBuilder&&) noexcept;
     OctreeBuilder& operator=(OctreeBuilder&&) noexcept;
@@ -157,6 +163,7 @@ public:
     std::uint64_t filteredNodeCount() const;
 
 private:
+    OctreeBuilder();
     struct Impl;
     std::unique_ptr<Impl> mImpl;
 };
