@@ -283,7 +283,7 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                                              sampler::estimateSampleMemory(mesh, o));
             NullProgress quiet;
             // An edited source is re-sampled only where its triangles changed (not with --force).
-            const detail::SampleResult sampled = force ? detail::SampleResult{sampler::sampleMesh(mesh, o, quiet), std::nullopt}
+            const detail::SampleResult sampled = force ? detail::SampleResult{sampler::sampleMesh(mesh, o, quiet), std::nullopt, {}}
                                                        : detail::sampleOrUpdate(mesh, o, earlier, quiet);
             const octree::SparseVolume& volume = sampled.volume;
             // Both or neither: a copy of another mesh beside the volume would mislead the next run.
@@ -301,7 +301,8 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                         {"source_area", volume.info.sourceArea},
                         {"fit_error_mean", volume.info.fitError.mean},
                         {"parameters", earlier.parameters},
-                        {"updated_region", region}};
+                        {"updated_region", region},
+                        {"updated_from", sampled.updatedFrom}};
         };
     }
 
@@ -323,7 +324,10 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
               << stages[stages[sampleStage].inputs[0]].outputHashes.at("mesh") << "\n";
             return d.str();
         };
-        b.run = [&stages, &budget, step, sampleStage](Stage& self) {
+        std::ostringstream buildParameters;
+        buildParameters << "filter " << step.filter << " tolerance " << step.tolerance;
+        const detail::EarlierBuild earlierBuild{manifestPath(b, root), b.outputs.at("octree"), buildParameters.str()};
+        b.run = [&stages, &budget, step, sampleStage, earlierBuild](Stage& self) {
             const fs::path sourceFile = stages[stages[sampleStage].inputs[0]].outputs.at("mesh");
             const fs::path volumeFile = stages[sampleStage].outputs.at("volume");
             const auto held = budget.reserve(volumeFile, "building its octree", octree::estimateBuildMemory(volumeFile));
@@ -332,7 +336,22 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             o.rule = *octree::parseFilterRule(step.filter);
             o.tolerance = step.tolerance;
             NullProgress quiet;
-            const octree::Octree tree = octree::buildOctree(volume, o, quiet);
+            // After a partial re-sampling, only the region's ancestors are filtered again.
+            const Stage& sample = stages[sampleStage];
+            std::optional<octree::VoxelBox> region;
+            std::string updatedFrom;
+            // (cached or run: buildOrUpdate checks that the earlier build built the volume the
+            // region was re-sampled from).
+            if (!sample.record.detailsJson.empty()) {
+                const Json d = Json::parse(sample.record.detailsJson);
+                if (d.value("updated_region", Json()).is_array()) {
+                    const auto r = d["updated_region"].get<std::vector<std::uint32_t>>();
+                    region = octree::VoxelBox{{r.at(0), r.at(1), r.at(2)}, {r.at(3), r.at(4), r.at(5)}};
+                    updatedFrom = d.value("updated_from", std::string());
+                }
+            }
+            bool updated = false;
+            const octree::Octree tree = detail::buildOrUpdate(volume, o, region, updatedFrom, earlierBuild, quiet, updated);
             octree::writeVto(tree, self.outputs.at("octree"));
             // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
             const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, ingest::loadMesh(sourceFile));
@@ -344,7 +363,9 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                                   {"chord_error", fidelity.chords[l].error()},
                                   {"beam_error_mean_abs", fidelity.beams[l].meanAbs},
                                   {"beam_error_p95_abs", fidelity.beams[l].p95Abs}});
-            return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels}};
+            return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels},
+                        {"parameters", earlierBuild.parameters}, {"volume", sample.outputHashes.at("volume")},
+                        {"updated", updated}};
         };
     }
 

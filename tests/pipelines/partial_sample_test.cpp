@@ -1,6 +1,7 @@
 // `vtex run` with an edited source: the sample stage re-samples only the region the changed
-// triangles touch (sampler::changedRegion, updateRegion), and its volume and the octree built
-// from it are the bytes a run from scratch makes.
+// triangles touch (sampler::changedRegion, updateRegion), the build stage filters again only the
+// region's ancestors (OctreeBuilder::resume), and the volume, the octree and the image are the
+// bytes a run from scratch makes.
 #include "run_vtex.h"
 
 #include <vtex/ingest/ingest.h>
@@ -74,6 +75,7 @@ TEST(PartialSample, AnEditedSourceIsResampledOnlyWhereItChangedAndGivesARunFromS
     const double share = double(r[3].get<int>() - r[0].get<int>()) * (r[4].get<int>() - r[1].get<int>()) *
                          (r[5].get<int>() - r[2].get<int>()) / (64.0 * 64 * 64);
     EXPECT_LT(share, 0.02) << sample.dump();
+    EXPECT_TRUE(details(report, "build")["updated"].get<bool>());  // only the region's ancestors filtered
 
     const fs::path fresh = makeBushProject("fresh", edited);
     ASSERT_TRUE(run(fresh).succeeded());
@@ -93,6 +95,7 @@ TEST(PartialSample, AnEditedSourceIsResampledOnlyWhereItChangedAndGivesARunFromS
     const auto damaged = run(dir);
     ASSERT_TRUE(damaged.succeeded());
     EXPECT_TRUE(details(damaged, "sample")["updated_region"].is_null());
+    EXPECT_FALSE(details(damaged, "build")["updated"].get<bool>());
     EXPECT_EQ(vtex::test::readText(dir / "out" / "samples" / "bush.vtl"), after);
 }
 
