@@ -72,7 +72,7 @@ std::vector<detail::TableEntry> sectionTable(const std::string& bytes) {
     return entries;
 }
 
-const detail::TableEntry& entryOf(const std::vector<detail::TableEntry>& table, const std::string& tag) {
+detail::TableEntry entryOf(const std::vector<detail::TableEntry>& table, const std::string& tag) {
     for (const auto& e : table)
         if (e.tag == tag) return e;
     throw std::runtime_error("no section " + tag);
@@ -121,7 +121,7 @@ TEST(LazyVto, ADamagedLevelFailsOnlyWhenItIsUsedNamingFileAndSection) {
     const Octree built = scatteredOctree(5);
     const fs::path path = writeTree(built, "damaged.vto");
     std::string bytes = readBytes(path);
-    const auto& lv5 = entryOf(sectionTable(bytes), "LV05");
+    const auto lv5 = entryOf(sectionTable(bytes), "LV05");
     bytes[lv5.offset + lv5.size / 2] = char(bytes[lv5.offset + lv5.size / 2] ^ 0x10);
     writeBytes(path, bytes);
     EXPECT_THROW(readVto(path), InputError);  // the eager reader checks everything
@@ -189,7 +189,7 @@ TEST(LazyVto, TheOpenFileIsReadAsItWasWhenReplacedAndRefusedWhenChangedInPlace) 
     const fs::path inPlace = writeTree(first, "in_place.vto");
     const auto opened = openVto(inPlace);
     std::string bytes = readBytes(inPlace);
-    const auto& lv3 = entryOf(sectionTable(bytes), "LV03");
+    const auto lv3 = entryOf(sectionTable(bytes), "LV03");
     bytes[lv3.offset + 9] ^= 0x40;
     {
         std::fstream f(inPlace, std::ios::binary | std::ios::in | std::ios::out);  // same inode
