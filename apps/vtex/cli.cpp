@@ -1,4 +1,6 @@
 #include "cli.h"
+
+#include <sstream>
 #include "registry.h"
 
 #include <vtex/core/atomic_file.h>
@@ -233,5 +235,28 @@ void TerminalProgress::draw(bool final) {
     std::fflush(stderr);
     mDrawn = true;
 }
+
+// `--region x0,y0,z0,x1,y1,z1`: finest voxel indices, the minimum corner inclusive and the
+// maximum exclusive (octree::VoxelBox), each from 0 to N. Bad usage naming the flag otherwise.
+octree::VoxelBox parseRegion(const std::string& flag, const std::string& text, std::uint32_t n) {
+    const auto refuse = [&](const std::string& why) { return CLI::ValidationError(flag, text + ": " + why); };
+    std::vector<std::uint32_t> values;
+    std::stringstream in(text);
+    for (std::string item; std::getline(in, item, ',');) {
+        if (item.empty() || item.size() > 7 || item.find_first_not_of("0123456789") != std::string::npos)
+            throw refuse("expected six whole numbers x0,y0,z0,x1,y1,z1");
+        values.push_back(std::uint32_t(std::stoul(item)));
+    }
+    if (values.size() != 6 || text.back() == ',') throw refuse("expected six whole numbers x0,y0,z0,x1,y1,z1");
+    octree::VoxelBox box{{values[0], values[1], values[2]}, {values[3], values[4], values[5]}};
+    for (int a = 0; a < 3; ++a) {
+        if (box.max[std::size_t(a)] > n)
+            throw refuse("beyond the volume's " + std::to_string(n) + " voxels a side (the maximum is exclusive)");
+        if (box.min[std::size_t(a)] >= box.max[std::size_t(a)])
+            throw refuse("empty (each minimum must be below its maximum, which is exclusive)");
+    }
+    return box;
+}
+
 
 }  // namespace vtex::cli

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <vtex/core/progress.h>
+#include <vtex/octree/volume.h>
 
 #include <CLI/CLI.hpp>
 
@@ -100,6 +101,12 @@ void checkOutputs(const std::vector<std::pair<std::string, std::string>>& output
 /// one of `formats` ("exr", "png") or it has none (written in the first): the format an image
 /// output is written in follows its name. An empty name passes (no such output).
 void checkImageExtension(const std::string& flag, const std::string& file, const std::vector<std::string>& formats);
+
+/// A region of voxels given on the command line as `x0,y0,z0,x1,y1,z1`: finest voxel indices,
+/// the minimum corner inclusive and the maximum exclusive (octree::VoxelBox), each from 0 to `n`
+/// (`vtex sample --update`, `vtex build --update`). Bad usage (CLI::ValidationError naming
+/// `flag`) when not six whole numbers, beyond the volume or empty.
+octree::VoxelBox parseRegion(const std::string& flag, const std::string& text, std::uint32_t n);
 
 /// Accepts a power of two from 1 to `largest` (voxel resolutions).
 CLI::Validator powerOfTwo(unsigned long long largest);

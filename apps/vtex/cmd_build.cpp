@@ -1,5 +1,6 @@
-// `vtex build leaves.vtl -o texel.vto [--filter neyret|sggx] [--tolerance E]`: every level,
-// filtered and compressed (octree library).
+// `vtex build leaves.vtl -o texel.vto [--filter neyret|sggx] [--tolerance E]
+// [--update old.vto --region x0,y0,z0,x1,y1,z1]`: every level, filtered and compressed (octree
+// library), or an earlier octree with only the ancestors of a region filtered again.
 #include "cli.h"
 #include "fidelity_report.h"
 
@@ -11,11 +12,51 @@
 
 #include <chrono>
 #include <cstdio>
+#include <algorithm>
 #include <iostream>
 #include <optional>
 
 namespace vtex::cli {
 namespace {
+
+// Refuses an earlier octree that a full build of `volume` with `options` would not have made.
+void checkEarlierTree(const octree::Octree& old, const octree::SparseVolume& volume, const octree::BuildOptions& options,
+                      const std::string& file) {
+    const auto& was = old.info.source;
+    if (was.levels != volume.info.levels || was.cyclic != volume.info.cyclic || was.scale != volume.info.scale ||
+        was.offset != volume.info.offset)
+        throw InputError(file, "built from a volume sampled otherwise (resolution, --cyclic or mapping): build in full");
+    if (old.info.rule != options.rule || old.info.tolerance != float(options.tolerance))
+        throw InputError(file, "built with --filter " + std::string(octree::filterRuleName(old.info.rule)) + " --tolerance " +
+                                   std::to_string(old.info.tolerance) + ", not the options given now");
+}
+
+// The octree of `volume`: with `--update`, the earlier tree's builder resumed and only the region
+// filtered again when the tree allows it (OctreeBuilder::resume), else a full build; the same
+// tree either way. `how` says which.
+octree::Octree buildOrUpdate(octree::SparseVolume volume, const octree::BuildOptions& options,
+                             const std::string& update, const std::string& regionText, Progress& progress,
+                             std::string& how) {
+    how = "full build";
+    if (update.empty()) return octree::buildOctree(std::move(volume), options, progress);
+    const octree::Octree old = octree::readVto(update);  // every section checked
+    checkEarlierTree(old, volume, options, update);
+    const octree::VoxelBox region = parseRegion("--region", regionText, std::uint32_t(1) << volume.info.levels);
+    const bool solid = std::any_of(volume.blocks.begin(), volume.blocks.end(), [](const auto& b) { return b.isSolid(); });
+    auto builder = solid ? std::nullopt : octree::OctreeBuilder::resume(old, volume.info, options);
+    if (!builder) {
+        how = "full build (" + update + " merged nodes or holds a solid interior)";
+        return octree::buildOctree(std::move(volume), options, progress);
+    }
+    std::vector<octree::VolumeBlock> inside;
+    for (const auto& b : volume.blocks) {
+        const auto c = octree::mortonDecode(b.key);
+        if (region.contains(c[0], c[1], c[2])) inside.push_back(b);
+    }
+    builder->updateRegion(region, std::move(inside), progress);
+    how = "updated " + update + " in the region";
+    return builder->compress(progress);
+}
 
 const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     app.name("build");
@@ -31,6 +72,8 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         std::uint64_t maxMemory = 0;
         int threads = 0;
         std::string source;
+        std::string update;
+        std::string region;
     };
     auto flags = std::make_shared<Flags>();
     app.add_option("VOLUME", flags->input, "Sampled volume (.vtl)")->required();
@@ -55,9 +98,18 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     app.add_option("--source", flags->source,
                    "The mesh the volume was sampled from: report each level's transmittance against it along "
                    "chords of the texel and over beams of the level (as vtex inspect --source)");
+    auto* update = app.add_option("--update", flags->update,
+                                  "Earlier octree (.vto) of this volume before an edit inside --region: filter again only "
+                                  "the region's ancestors (the same options; an octree that merged nodes, or a solid "
+                                  "interior, is built in full)");
+    auto* region = app.add_option("--region", flags->region,
+                                  "With --update: the voxels that changed, x0,y0,z0,x1,y1,z1 in finest voxel indices, "
+                                  "minimum inclusive, maximum exclusive (as given to vtex sample --update)");
+    update->needs(region);
+    region->needs(update);
     return [flags](const GlobalOptions& global) {
         const ThreadLimit threadLimit(flags->threads);
-        checkOutputPath(flags->output, {flags->input, flags->source});  // before any work (atomic_file.h)
+        checkOutputPath(flags->output, {flags->input, flags->source, flags->update});  // before any work (atomic_file.h)
         checkMemoryEstimate(flags->input, "building its octree", octree::estimateBuildMemory(flags->input),
                             flags->maxMemory);
         // The source is loaded before the build, quiet or not: a bad --source fails (exit 3,
@@ -71,13 +123,14 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         options.tolerance = flags->tolerance;
         options.filterErrorSamples = flags->filterErrorSamples;
         TerminalProgress progress(global);
-        const octree::Octree tree = octree::buildOctree(std::move(volume), options, progress);
+        std::string how;
+        const octree::Octree tree = buildOrUpdate(std::move(volume), options, flags->update, flags->region, progress, how);
         octree::writeVto(tree, flags->output);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        char line[512];
-        std::snprintf(line, sizeof line, "%s: %u levels, %llu stored nodes, compression %.2f%%, %.2f s -> %s",
+        char line[1024];
+        std::snprintf(line, sizeof line, "%s: %u levels, %llu stored nodes, compression %.2f%%, %s, %.2f s -> %s",
                       flags->input.c_str(), tree.levelCount(), (unsigned long long)tree.storedNodes(),
-                      100.0 * tree.compression(), seconds, flags->output.c_str());
+                      100.0 * tree.compression(), how.c_str(), seconds, flags->output.c_str());
         status(global, line);
         if (source && global.verbosity() != Verbosity::Quiet)
             printFidelity(render::measureSourceFidelity(tree, *source), flags->source, std::cerr);

@@ -1,5 +1,6 @@
-// `vtex sample mesh.glb -o leaves.vtl --resolution N [--cyclic] [--solid auto|on|off]`: the
-// finest level of a texel (sampler library).
+// `vtex sample mesh.glb -o leaves.vtl --resolution N [--cyclic] [--solid auto|on|off]
+// [--update old.vtl --region x0,y0,z0,x1,y1,z1]`: the finest level of a texel (sampler library),
+// or an earlier one re-sampled inside a region (the partial recompute).
 #include "cli.h"
 
 #include <vtex/core/atomic_file.h>
@@ -7,11 +8,21 @@
 #include <vtex/ingest/ingest.h>
 #include <vtex/sampler/sampler.h>
 
+#include <vtex/octree/volume.h>
+
 #include <chrono>
 #include <cstdio>
+#include <optional>
 
 namespace vtex::cli {
 namespace {
+
+// The earlier volume of `--update`, and the resolution it fixes unless -r was given.
+octree::SparseVolume readEarlierVolume(const std::string& file, bool resolutionGiven, std::uint32_t& resolution) {
+    octree::SparseVolume old = octree::readVtl(file);
+    if (!resolutionGiven) resolution = std::uint32_t(1) << old.info.levels;
+    return old;
+}
 
 const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
     app.name("sample");
@@ -28,6 +39,8 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         double solidDensity = 0;
         std::uint64_t maxMemory = 0;
         int threads = 0;
+        std::string update;
+        std::string region;
     };
     auto flags = std::make_shared<Flags>();
     app.add_option("MESH", flags->input, "Source mesh (.glb, or anything `vtex ingest` reads)")->required();
@@ -48,10 +61,26 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         ->check(CLI::IsMember({"auto", "unit", "fit"}));
     addMaxMemoryOption(app, flags->maxMemory, "the sampler's footprint");
     addThreadsOption(app, flags->threads);
-    return [flags](const GlobalOptions& global) {
+    auto* update = app.add_option("--update", flags->update,
+                                  "Earlier volume (.vtl) of this mesh before an edit: re-sample only --region, keep the "
+                                  "rest (the same options; its resolution unless -r is given)");
+    auto* region = app.add_option("--region", flags->region,
+                                  "With --update: the voxels to re-sample, x0,y0,z0,x1,y1,z1 in finest voxel indices, "
+                                  "minimum inclusive, maximum exclusive; every voxel the edited triangles touched, before "
+                                  "and after the edit, must lie inside");
+    update->needs(region);
+    region->needs(update);
+    auto* resolution = app.get_option("--resolution");
+    return [flags, resolution](const GlobalOptions& global) {
         const ThreadLimit threadLimit(flags->threads);
-        checkOutputPath(flags->output, {flags->input});  // before any work (atomic_file.h)
+        checkOutputPath(flags->output, {flags->input, flags->update});  // before any work (atomic_file.h)
         const auto start = std::chrono::steady_clock::now();
+        std::optional<octree::SparseVolume> old;
+        std::optional<octree::VoxelBox> regionBox;
+        if (!flags->update.empty()) {
+            old = readEarlierVolume(flags->update, resolution->count() > 0, flags->resolution);
+            regionBox = parseRegion("--region", flags->region, flags->resolution);  // before the mesh is read
+        }
         const ingest::TriangleMesh mesh = ingest::loadMesh(flags->input);
         sampler::SampleOptions options;
         options.resolution = flags->resolution;
@@ -75,8 +104,10 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
                           double(sampler::estimateSampleMemory(mesh, options)) / 1048576.0);
             status(global, line);
         }
+        options.region = regionBox;
         TerminalProgress progress(global);
-        const octree::SparseVolume volume = sampler::sampleMesh(mesh, options, progress);
+        const octree::SparseVolume volume = old ? sampler::updateRegion(mesh, *old, options, flags->update, progress)
+                                                : sampler::sampleMesh(mesh, options, progress);
         octree::writeVtl(volume, flags->output);
         std::uint64_t surface = 0, solid = 0;
         for (const auto& b : volume.blocks) (b.isSolid() ? solid : surface)++;

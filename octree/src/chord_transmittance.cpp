@@ -78,6 +78,7 @@ double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const 
 
 void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b,
                            const std::function<void(const OctreeNode&, double, double)>& visit) {
+    tree.loadLevels(level);  // a tree opened with openVto reads the level now if need be
     if (tree.levels.empty() || tree.levels[0].empty() || level >= tree.levels.size()) return;
     OctreeCursor cursor(tree);
     const double n = double(std::uint64_t(1) << level);

@@ -20,15 +20,11 @@ std::uint64_t checksum(std::string_view bytes) { return XXH3_64bits(bytes.data()
 
 std::string sectionLocation(std::string_view tag) { return "section '" + std::string(tag) + "'"; }
 
-namespace {
-
 std::string printableTag(std::string_view raw) {
     std::string tag;
     for (char c : raw) tag += (c >= 0x20 && c < 0x7F) ? c : '?';
     return tag;
 }
-
-}  // namespace
 
 std::uint64_t tableChecksum(std::string_view bytes, std::size_t tableEnd) {
     // The first 16 bytes (magic, version, count) and the table, skipping the checksum field.
@@ -78,16 +74,11 @@ void writeContainerFile(const std::filesystem::path& file, std::string_view magi
     out.commit();
 }
 
-namespace {
-
-struct TableEntry {
-    std::string tag;
-    std::uint64_t offset, size, sum;
-};
-
-// Parses the header and table; returns a problem description or an empty string.
-std::string readTable(std::string_view bytes, std::string_view magic, std::uint32_t supportedVersion,
-                      std::uint32_t& version, std::vector<TableEntry>& entries, std::string& location) {
+// Parses the header and table from `bytes` (at least the header and table of a file of
+// `fileSize` bytes); returns a problem description or an empty string.
+std::string readTable(std::string_view bytes, std::uint64_t fileSize, std::string_view magic,
+                      std::uint32_t supportedVersion, std::uint32_t& version, std::vector<TableEntry>& entries,
+                      std::string& location) {
     location = "header";
     const std::string_view head = bytes.substr(0, std::min<std::size_t>(8, bytes.size()));
     if (head != magic.substr(0, head.size()))
@@ -120,10 +111,10 @@ std::string readTable(std::string_view bytes, std::string_view magic, std::uint3
             location = sectionLocation(printableTag(entry.tag));
             return "at a wrong offset";
         }
-        if (entry.size > bytes.size() || entry.offset + entry.size > bytes.size()) {
+        if (entry.size > fileSize || entry.offset + entry.size > fileSize) {
             location = sectionLocation(printableTag(entry.tag));
             return "truncated (" + std::to_string(entry.size) + " bytes claimed, the file ends after " +
-                   std::to_string(bytes.size() - std::min<std::uint64_t>(bytes.size(), entry.offset)) + ")";
+                   std::to_string(fileSize - std::min<std::uint64_t>(fileSize, entry.offset)) + ")";
         }
         expected += entry.size;
         entries.push_back(std::move(entry));
@@ -131,14 +122,12 @@ std::string readTable(std::string_view bytes, std::string_view magic, std::uint3
     return {};
 }
 
-}  // namespace
-
 std::vector<InSection> readContainer(std::string_view bytes, std::string_view magic,
                                      std::uint32_t supportedVersion, const std::filesystem::path& file) {
     std::uint32_t version = 0;
     std::vector<TableEntry> entries;
     std::string location;
-    const std::string problem = readTable(bytes, magic, supportedVersion, version, entries, location);
+    const std::string problem = readTable(bytes, bytes.size(), magic, supportedVersion, version, entries, location);
     if (!problem.empty()) throw InputError(file, problem, location);
     std::vector<InSection> sections;
     for (const auto& entry : entries) {
@@ -184,7 +173,8 @@ FileCheck checkFile(std::string_view bytes, std::string_view magic, std::uint32_
     FileCheck check;
     std::vector<TableEntry> entries;
     std::string location;
-    const std::string problem = readTable(bytes, magic, supportedVersion, check.version, entries, location);
+    const std::string problem =
+        readTable(bytes, bytes.size(), magic, supportedVersion, check.version, entries, location);
     if (!problem.empty()) {
         check.problem = location + ": " + problem;
         return check;

@@ -105,6 +105,23 @@ std::uint64_t checksum(std::string_view bytes);
 /// `tableEnd`.
 std::uint64_t tableChecksum(std::string_view bytes, std::size_t tableEnd);
 
+/// One row of the section table: where a section's payload lies and its checksum.
+struct TableEntry {
+    std::string tag;
+    std::uint64_t offset, size, sum;
+};
+
+/// Parses the header and section table from `bytes`, which hold at least the first
+/// kHeaderSize + kTableEntrySize · count bytes of a file of `fileSize` bytes (the whole file, or
+/// only its head for a reader that loads sections on demand). Returns a problem description
+/// (and its `location`) or an empty string.
+std::string readTable(std::string_view bytes, std::uint64_t fileSize, std::string_view magic,
+                      std::uint32_t supportedVersion, std::uint32_t& version, std::vector<TableEntry>& entries,
+                      std::string& location);
+
+/// A tag as it may be printed in a message: bytes outside printable ASCII become '?'.
+std::string printableTag(std::string_view raw);
+
 /// The header and section table of a container holding `sections`, in that order.
 std::string containerHeader(std::string_view magic, std::uint32_t version, const std::vector<OutSection>& sections);
 /// The whole container as bytes.

@@ -1,5 +1,6 @@
 // The compressed octree: queries and the .vto file format (docs/formats.md).
 #include "container.h"
+#include "vto_sections.h"
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
@@ -16,7 +17,58 @@
 
 namespace vtex::octree {
 
+namespace {
+constexpr std::uint32_t kAllLevels = ~std::uint32_t(0);
+}  // namespace
+
+Octree::Octree() = default;
+Octree::~Octree() = default;
+Octree::Octree(const Octree& other) { *this = other; }
+Octree::Octree(Octree&& other) { *this = std::move(other); }
+
+Octree& Octree::operator=(const Octree& other) {
+    if (this == &other) return *this;
+    other.loadLevels(kAllLevels);
+    info = other.info;
+    levels = other.levels;
+    stats = other.stats;
+    mBytesRead = other.bytesRead();
+    mLoader.reset();
+    return *this;
+}
+
+Octree& Octree::operator=(Octree&& other) {
+    if (this == &other) return *this;
+    // The loader stays behind: the moved-to object may be const, and loadLevels may write only
+    // into the non-const object openVto made.
+    other.loadLevels(kAllLevels);
+    info = std::move(other.info);
+    levels = std::move(other.levels);
+    stats = std::move(other.stats);
+    mBytesRead = other.bytesRead();
+    mLoader.reset();
+    other.mLoader.reset();
+    other.levels.clear();
+    return *this;
+}
+
+bool operator==(const Octree& a, const Octree& b) {
+    a.loadLevels(kAllLevels);
+    b.loadLevels(kAllLevels);
+    return a.info == b.info && a.levels == b.levels && a.stats == b.stats;
+}
+
+void Octree::loadLevels(std::uint32_t level) const {
+    // A tree with a loader is the non-const object openVto made (copies and moves load
+    // everything and drop the loader), so filling its levels writes no const object; the level
+    // vectors other threads may be reading are never touched, only the ones not yet loaded.
+    if (mLoader) mLoader->load(level, const_cast<Octree&>(*this));
+}
+
+std::uint64_t Octree::bytesRead() const { return mLoader ? mLoader->bytesRead() : mBytesRead; }
+
 std::uint64_t Octree::storedNodes() const {
+    loadLevels(kAllLevels);
     std::uint64_t n = 0;
     for (const auto& level : levels) n += level.size();
     return n;
@@ -28,6 +80,7 @@ double Octree::compression() const {
 }
 
 std::vector<VolumeBlock> Octree::expandLevel(std::uint32_t level) const {
+    loadLevels(level);
     std::vector<VolumeBlock> out;
     if (levels.empty() || level >= levels.size()) return out;
     struct Item {
@@ -65,15 +118,7 @@ std::optional<FilterRule> parseFilterRule(std::string_view name) {
 
 namespace {
 
-constexpr std::string_view kVtoMagic{"VTEX.VTO", 8};
 constexpr std::size_t kNodeRecordSize = 1 + detail::kVoxelRecordSize;
-constexpr std::size_t kStatRecordSize = 8 * 7;
-
-std::string levelTag(std::uint32_t l) {
-    char tag[8];
-    std::snprintf(tag, sizeof tag, "LV%02u", l % 100);
-    return tag;
-}
 
 // The container's sections of `octree`. A level's records have a fixed size, so its section
 // is filled from all threads (a 1024³ texel stores some 10⁷ nodes).
@@ -120,97 +165,33 @@ std::vector<detail::OutSection> vtoSections(const Octree& octree) {
 }  // namespace
 
 std::string serializeVto(const Octree& octree) {
-    return detail::writeContainer(kVtoMagic, kVtoVersion, vtoSections(octree));
+    return detail::writeContainer(detail::kVtoMagic, kVtoVersion, vtoSections(octree));
 }
 
 Octree parseVto(std::string_view bytes, const std::filesystem::path& file) {
     using namespace detail;
     const auto sections = readContainer(bytes, kVtoMagic, kVtoVersion, file);
-    requireKnownSections(
-        sections,
-        [](std::string_view tag) {
-            return tag == "HEAD" || tag == "STAT" ||
-                   (tag.size() == 4 && tag.substr(0, 2) == "LV" && std::isdigit(static_cast<unsigned char>(tag[2])) &&
-                    std::isdigit(static_cast<unsigned char>(tag[3])));
-        },
-        file);
+    requireKnownSections(sections, isVtoSection, file);
     Octree tree;
-    {
-        ByteReader head(requireSection(sections, "HEAD", file));
-        tree.info.source = readVolumeInfo(head, file, "HEAD");
-        const std::uint8_t rule = head.u8();
-        tree.info.tolerance = head.f32();
-        const std::uint32_t count = head.u32();
-        const std::string where = sectionLocation("HEAD");
-        if (!head.ok() || head.remaining() != 0) throw InputError(file, "wrong size", where);
-        if (rule > 1) throw InputError(file, "unknown filter rule " + std::to_string(rule), where);
-        tree.info.rule = rule == 0 ? FilterRule::Neyret : FilterRule::Sggx;
-        if (!std::isfinite(tree.info.tolerance) || tree.info.tolerance < 0)
-            throw InputError(file, "invalid tolerance", where);
-        if (count != tree.info.source.levels + 1)
-            throw InputError(file, "level count " + std::to_string(count) + " does not match the resolution", where);
-    }
+    parseVtoHead(requireSection(sections, "HEAD", file), tree, file);
+    parseVtoStats(requireSection(sections, "STAT", file), tree, file);
     const std::uint32_t levelCount = tree.info.source.levels + 1;
-    {
-        const std::string_view payload = requireSection(sections, "STAT", file);
-        if (payload.size() != kStatRecordSize * levelCount)
-            throw InputError(file, "wrong size for " + std::to_string(levelCount) + " levels", sectionLocation("STAT"));
-        ByteReader r(payload);
-        tree.stats.resize(levelCount);
-        for (auto& s : tree.stats) {
-            s.storedNodes = r.u64();
-            s.occupiedNodes = r.u64();
-            s.meanDensity = r.f64();
-            s.meanOccupiedDensity = r.f64();
-            s.filterErrorMean = r.f64();
-            s.filterErrorMax = r.f64();
-            s.filterErrorSamples = r.u64();
-            if (!std::isfinite(s.meanDensity) || !std::isfinite(s.meanOccupiedDensity) ||
-                !std::isfinite(s.filterErrorMean) || !std::isfinite(s.filterErrorMax))
-                throw InputError(file, "non-finite statistic", sectionLocation("STAT"));
-        }
-    }
     tree.levels.resize(levelCount);
     std::uint64_t expected = 1;  // nodes the level above announces
-    for (std::uint32_t l = 0; l < levelCount; ++l) {
-        const std::string tag = levelTag(l);
-        const std::string where = sectionLocation(tag);
-        ByteReader r(requireSection(sections, tag, file));
-        const std::uint64_t count = r.u64();
-        if (!r.ok() || count > r.remaining() / kNodeRecordSize || count * kNodeRecordSize != r.remaining())
-            throw InputError(file, "size does not match its node count " + std::to_string(count), where);
-        if (count != expected)
-            throw InputError(file, std::to_string(count) + " nodes where the level above has " +
-                                       std::to_string(expected) + " children", where);
-        if (tree.stats[l].storedNodes != count) throw InputError(file, "node count disagrees with STAT", where);
-        auto& nodes = tree.levels[l];
-        nodes.resize(count);
-        std::uint64_t children = 0;
-        for (std::uint64_t i = 0; i < count; ++i) {
-            OctreeNode& node = nodes[i];
-            node.childMask = r.u8();
-            node.data = readVoxelData(r);
-            const std::string nodeWhere = where + ", node " + std::to_string(i);
-            // Only an empty root (an empty volume) may be stored empty.
-            const bool mayBeEmpty = l == 0 && node.childMask == 0;
-            if (const auto problem = checkVoxelData(node.data, mayBeEmpty); !problem.empty())
-                throw InputError(file, problem, nodeWhere);
-            if (l + 1 == levelCount && node.childMask != 0)
-                throw InputError(file, "finest-level node with children", nodeWhere);
-            if (children > std::numeric_limits<std::uint32_t>::max())
-                throw InputError(file, "too many nodes", nodeWhere);
-            node.firstChild = std::uint32_t(children);
-            children += std::uint64_t(std::popcount(unsigned(node.childMask)));
-        }
-        expected = children;
-    }
+    for (std::uint32_t l = 0; l < levelCount; ++l)
+        expected = parseVtoLevel(requireSection(sections, levelTag(l), file), l, expected, tree, tree.levels[l], file);
     return tree;
 }
 
 void writeVto(const Octree& octree, const std::filesystem::path& file) {
-    detail::writeContainerFile(file, kVtoMagic, kVtoVersion, vtoSections(octree));
+    detail::writeContainerFile(file, detail::kVtoMagic, kVtoVersion, vtoSections(octree));
 }
 
-Octree readVto(const std::filesystem::path& file) { return parseVto(readFileBytes(file), file); }
+Octree readVto(const std::filesystem::path& file) {
+    const std::string bytes = readFileBytes(file);
+    Octree tree = parseVto(bytes, file);
+    tree.mBytesRead = bytes.size();
+    return tree;
+}
 
 }  // namespace vtex::octree

@@ -428,6 +428,42 @@ OctreeBuilder::OctreeBuilder(SparseVolume finest, const BuildOptions& options, P
     mImpl->buildAll(progress);
 }
 
+OctreeBuilder::OctreeBuilder() : mImpl(std::make_unique<Impl>()) {}
+
+std::optional<OctreeBuilder> OctreeBuilder::resume(const Octree& tree, const VolumeInfo& info, const BuildOptions& options) {
+    tree.loadLevels(~std::uint32_t(0));
+    const std::uint32_t L = tree.info.source.levels;
+    if (tree.levelCount() != L + 1 || info.levels != L || info.solidDensity != 0 || tree.info.source.solidDensity != 0)
+        return std::nullopt;
+    OctreeBuilder builder;
+    Impl& m = *builder.mImpl;
+    m.options = options;
+    m.volume.info = info;
+    m.levels.assign(L + 1, {});
+    // The pyramid is the stored tree when nothing above the finest level was merged: every
+    // stored node there has children, and a stored node's data is its pyramid node's.
+    const OctreeNode& root = tree.levels[0][0];
+    if (root.data.isEmpty() && root.isLeaf()) return builder;  // an empty volume
+    std::vector<std::uint64_t> keys{0}, next;
+    for (std::uint32_t l = 0; l <= L; ++l) {
+        next.clear();
+        Level& level = m.levels[l];
+        level.reserve(tree.levels[l].size());
+        for (std::size_t i = 0; i < tree.levels[l].size(); ++i) {
+            const OctreeNode& node = tree.levels[l][i];
+            if (l < L && node.isLeaf()) return std::nullopt;  // merged: its descendants are not stored
+            level.push_back(PNode{keys[i], node.data, std::numeric_limits<float>::quiet_NaN(),
+                                  std::uint8_t(l == L ? kSource : 0)});
+            for (unsigned c = 0; c < 8; ++c)
+                if (node.childMask & (1u << c)) next.push_back((keys[i] << 3) | c);
+        }
+        std::swap(keys, next);
+    }
+    m.volume.blocks.reserve(m.levels[L].size());
+    for (const PNode& node : m.levels[L]) m.volume.blocks.push_back(VolumeBlock{node.key, std::uint8_t(L), 0, node.data});
+    return builder;
+}
+
 OctreeBuilder::~OctreeBuilder() = default;
 OctreeBuilder::OctreeBuilder(OctreeBuilder&&) noexcept = default;
 OctreeBuilder& OctreeBuilder::operator=(OctreeBuilder&&) noexcept = default;

@@ -21,6 +21,7 @@
 
 #include "content_hash.h"
 #include "memory_monitor.h"
+#include "partial_sample.h"
 #include "report.h"
 
 #include <nlohmann/json.hpp>
@@ -258,18 +259,23 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         Stage sample{"sample", step.name};
         sample.inputs = {sourceIndex.at(step.source)};
         sample.outputs["volume"] = root / "samples" / (step.name + ".vtl");
+        // The mesh the volume was sampled from, for the next run to find what changed.
+        sample.outputs["sampled_mesh"] = root / "samples" / (step.name + ".mesh.glb");
         sampleIndex[step.name] = stages.size();
         stages.push_back(std::move(sample));
         Stage& s = stages.back();
         const std::size_t sourceStage = s.inputs[0];
-        s.describe = [&stages, step, cyclic, sourceStage, sampledResolution, header] {
-            std::ostringstream d;
-            d << header << "sample\nresolution " << sampledResolution << " cyclic " << cyclic << " solid " << step.solid
-              << "\nmesh " << stages[sourceStage].outputHashes.at("mesh") << "\n";
-            return d.str();
+        std::ostringstream parameters;
+        parameters << header << "sample\nresolution " << sampledResolution << " cyclic " << cyclic << " solid " << step.solid
+                   << "\n";
+        s.describe = [&stages, sourceStage, parameters = parameters.str()] {
+            return parameters + "mesh " + stages[sourceStage].outputHashes.at("mesh") + "\n";
         };
-        s.run = [&stages, &budget, step, cyclic, sourceStage, sampledResolution](Stage& self) {
+        const detail::EarlierSample earlier{manifestPath(s, root), s.outputs.at("volume"), s.outputs.at("sampled_mesh"),
+                                            parameters.str()};
+        s.run = [&stages, &budget, step, cyclic, sourceStage, sampledResolution, earlier, force = options.force](Stage& self) {
             const fs::path meshFile = stages[sourceStage].outputs.at("mesh");
+            const std::string meshBytes = readText(meshFile);
             const ingest::TriangleMesh mesh = ingest::loadMesh(meshFile);
             sampler::SampleOptions o;
             o.resolution = sampledResolution;
@@ -280,13 +286,27 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             const auto held = budget.reserve(meshFile, "sampling at " + std::to_string(sampledResolution) + "^3",
                                              sampler::estimateSampleMemory(mesh, o));
             NullProgress quiet;
-            const octree::SparseVolume volume = sampler::sampleMesh(mesh, o, quiet);
-            octree::writeVtl(volume, self.outputs.at("volume"));
+            // An edited source is re-sampled only where its triangles changed (not with --force).
+            const detail::SampleResult sampled = force ? detail::SampleResult{sampler::sampleMesh(mesh, o, quiet), std::nullopt, {}}
+                                                       : detail::sampleOrUpdate(mesh, o, earlier, quiet);
+            const octree::SparseVolume& volume = sampled.volume;
+            // Both or neither: a copy of another mesh beside the volume would mislead the next run.
+            AtomicOutputFile vtl(self.outputs.at("volume")), copy(self.outputs.at("sampled_mesh"));
+            vtl.stream() << octree::serializeVtl(volume);
+            copy.stream() << meshBytes;
+            commitAll({&vtl, &copy});
+            Json region = nullptr;
+            if (sampled.region)
+                region = {sampled.region->min[0], sampled.region->min[1], sampled.region->min[2],
+                          sampled.region->max[0], sampled.region->max[1], sampled.region->max[2]};
             return Json{{"resolution", sampledResolution},
                         {"maximum_resolution", step.resolution},
                         {"occupied_blocks", volume.blocks.size()},
                         {"source_area", volume.info.sourceArea},
-                        {"fit_error_mean", volume.info.fitError.mean}};
+                        {"fit_error_mean", volume.info.fitError.mean},
+                        {"parameters", earlier.parameters},
+                        {"updated_region", region},
+                        {"updated_from", sampled.updatedFrom}};
         };
     }
 
@@ -308,7 +328,10 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
               << stages[stages[sampleStage].inputs[0]].outputHashes.at("mesh") << "\n";
             return d.str();
         };
-        b.run = [&stages, &budget, step, sampleStage](Stage& self) {
+        std::ostringstream buildParameters;
+        buildParameters << "filter " << step.filter << " tolerance " << step.tolerance;
+        const detail::EarlierBuild earlierBuild{manifestPath(b, root), b.outputs.at("octree"), buildParameters.str()};
+        b.run = [&stages, &budget, step, sampleStage, earlierBuild](Stage& self) {
             const fs::path sourceFile = stages[stages[sampleStage].inputs[0]].outputs.at("mesh");
             const fs::path volumeFile = stages[sampleStage].outputs.at("volume");
             const auto held = budget.reserve(volumeFile, "building its octree", octree::estimateBuildMemory(volumeFile));
@@ -317,7 +340,22 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             o.rule = *octree::parseFilterRule(step.filter);
             o.tolerance = step.tolerance;
             NullProgress quiet;
-            const octree::Octree tree = octree::buildOctree(std::move(volume), o, quiet);
+            // After a partial re-sampling, only the region's ancestors are filtered again.
+            const Stage& sample = stages[sampleStage];
+            std::optional<octree::VoxelBox> region;
+            std::string updatedFrom;
+            // (cached or run: buildOrUpdate checks that the earlier build built the volume the
+            // region was re-sampled from).
+            if (!sample.record.detailsJson.empty()) {
+                const Json d = Json::parse(sample.record.detailsJson);
+                if (d.value("updated_region", Json()).is_array()) {
+                    const auto r = d["updated_region"].get<std::vector<std::uint32_t>>();
+                    region = octree::VoxelBox{{r.at(0), r.at(1), r.at(2)}, {r.at(3), r.at(4), r.at(5)}};
+                    updatedFrom = d.value("updated_from", std::string());
+                }
+            }
+            bool updated = false;
+            const octree::Octree tree = detail::buildOrUpdate(std::move(volume), o, region, updatedFrom, earlierBuild, quiet, updated);
             octree::writeVto(tree, self.outputs.at("octree"));
             // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
             const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, ingest::loadMesh(sourceFile));
@@ -329,7 +367,9 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
                                   {"chord_error", fidelity.chords[l].error()},
                                   {"beam_error_mean_abs", fidelity.beams[l].meanAbs},
                                   {"beam_error_p95_abs", fidelity.beams[l].p95Abs}});
-            return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels}};
+            return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels},
+                        {"parameters", earlierBuild.parameters}, {"volume", sample.outputHashes.at("volume")},
+                        {"updated", updated}};
         };
     }
 

@@ -175,6 +175,12 @@ double fileBytes(const std::filesystem::path& file) {
 
 }  // namespace
 
+void countVtoBytes(const TexelDef& texel, const octree::Octree& tree, RenderStats& stats) {
+    if (texel.octree) return;
+    stats.vtoBytesRead += tree.bytesRead();
+    stats.vtoFileBytes += std::uint64_t(fileBytes(texel.volume));
+}
+
 std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& options) {
     // The factors are stated and measured in renderer.h (estimateRenderMemory).
     const int w = options.width > 0 ? options.width : scene.camera.width;

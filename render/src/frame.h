@@ -61,6 +61,10 @@ std::pair<int, int> imageSize(const Scene& scene, int width, int height);
 /// estimateRenderMemory, states the factors).
 std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& options);
 
+/// Adds what `tree` (the texel's volume, once the render is done) read of its file, and the
+/// file's size, to stats.vtoBytesRead and stats.vtoFileBytes (nothing for an in-memory octree).
+void countVtoBytes(const TexelDef& texel, const octree::Octree& tree, RenderStats& stats);
+
 /// Pinhole camera rays through image coordinates (px, py) ∈ [0,1]², (0,0) the top left.
 class CameraRays {
 public:

@@ -110,6 +110,7 @@ struct MarchVolume::Slot {
 };
 
 MarchVolume::MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGridLevel) : mTree(std::move(tree)) {
+    if (mTree) mTree->loadLevels(0);
     if (mTree && !mTree->levels.empty() && !mTree->levels[0].empty()) mMaxLevel = std::min(int(mTree->levels.size()) - 1, 30);
     mMaxGridLevel = std::clamp(maxGridLevel, -1, std::min(mMaxLevel, LevelGrid::kMaxLevel));
     if (mMaxGridLevel >= 0) mSlots = std::make_unique<Slot[]>(std::size_t(mMaxGridLevel + 1));
@@ -121,6 +122,7 @@ const LevelGrid* MarchVolume::grid(int level) const {
     if (level < 0 || level > mMaxGridLevel) return nullptr;
     Slot& slot = mSlots[std::size_t(level)];
     std::call_once(slot.once, [&] {
+        mTree->loadLevels(std::uint32_t(level));  // a tree opened with openVto reads the level now
         auto grid = std::make_unique<LevelGrid>();
         grid->level = level;
         const std::uint32_t n = grid->n = 1u << level;

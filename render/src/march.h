@@ -24,6 +24,7 @@ std::uint64_t marchBlocks(const octree::Octree& tree, int level, const Eigen::Ve
                           const Eigen::Vector3d& dir, double length, Visit&& visit) {
     if (tree.levels.empty() || tree.levels[0].empty() || !(length > 0)) return 0;
     level = std::clamp(level, 0, std::min(int(tree.levels.size()) - 1, 30));
+    tree.loadLevels(std::uint32_t(level));  // a tree opened with openVto reads the level now
     const std::int64_t n = std::int64_t(1) << level;
     const double invN = 1.0 / double(n);
     // Every step looks the block up a little past its entry so that a point on a block face

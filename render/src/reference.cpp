@@ -201,6 +201,7 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     std::vector<SourceRuntime> sources(scene.texels.size());
     std::vector<const detail::SourceBvh*> bvhs(scene.texels.size(), nullptr);
     std::uint64_t sourceTriangles = 0;
+    RenderStats vtoBytes;  // only its .vto counts
     for (const SurfaceDef& s : scene.surfaces) {
         if (!s.texel || sources[*s.texel].bvh) continue;
         const TexelDef& def = scene.texels[*s.texel];
@@ -209,8 +210,9 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
         SourceRuntime& runtime = sources[*s.texel];
         runtime.mesh = loadTexelSource(scene, *s.texel);
         // Where the sampler put the mesh in the unit cube is recorded in the volume.
-        const octree::VolumeInfo placement = loadTexelVolume(scene, *s.texel)->info.source;
-        runtime.bvh = std::make_unique<detail::SourceBvh>(*runtime.mesh, placement);
+        const auto volume = loadTexelVolume(scene, *s.texel);
+        runtime.bvh = std::make_unique<detail::SourceBvh>(*runtime.mesh, volume->info.source);
+        detail::countVtoBytes(def, *volume, vtoBytes);
         runtime.material = def.material;
         bvhs[*s.texel] = runtime.bvh.get();
         sourceTriangles += runtime.mesh->triangles.size();
@@ -257,6 +259,8 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     result.stats = detail::summarize(tileCounters, geometry, threads, width, height, samples, wallSeconds, loadSeconds);
     result.stats.renderer = deformedMode ? "reference-deformed" : "reference-embedded";
     result.stats.referenceTriangles = deformedMode ? deformed->triangleCount() : sourceTriangles;
+    result.stats.vtoBytesRead = vtoBytes.vtoBytesRead;
+    result.stats.vtoFileBytes = vtoBytes.vtoFileBytes;
     result.image = std::move(image);
     result.warnings = detail::renderWarnings(scene, tileCounters);
     return result;

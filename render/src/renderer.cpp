@@ -336,10 +336,12 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
 
     const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - renderStart).count();
     result.stats = detail::summarize(tileCounters, geometry, threads, width, height, strata * strata, wallSeconds, loadSeconds);
-    for (const TexelRuntime& t : texels) {
+    for (std::size_t i = 0; i < texels.size(); ++i) {
+        const TexelRuntime& t = texels[i];
         if (!t.volume) continue;
         result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
         result.stats.levelScales.push_back(t.levelScale);
+        detail::countVtoBytes(scene.texels[i], t.volume->tree(), result.stats);
     }
     result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
     result.image = std::move(image);
@@ -369,6 +371,8 @@ void writeStatsJson(const RenderStats& s, AtomicOutputFile& out) {
     j["voxels_visited"] = s.voxelsVisited;
     j["reflectance_evaluations"] = s.reflectanceEvaluations;
     j["level_histogram"] = s.levelHistogram;
+    j["vto_bytes_read"] = s.vtoBytesRead;
+    j["vto_file_bytes"] = s.vtoFileBytes;
     j["mean_level"] = s.meanLevel();
     if (s.renderer == "texel") {
         j["mesh_segments"] = s.meshSegments;

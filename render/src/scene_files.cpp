@@ -40,7 +40,7 @@ std::shared_ptr<const octree::Octree> loadTexelVolume(const Scene& scene, std::s
     const TexelDef& def = scene.texels.at(texel);
     if (def.octree) return def.octree;
     return namingTheKey(scene, indexedKey("texel", texel, "volume"),
-                        [&] { return std::make_shared<const octree::Octree>(octree::readVto(def.volume)); });
+                        [&] { return octree::openVto(def.volume); });
 }
 
 std::shared_ptr<const ingest::TriangleMesh> loadTexelSource(const Scene& scene, std::size_t texel) {

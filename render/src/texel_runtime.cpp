@@ -42,6 +42,7 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
         if (t.volume) continue;
         const TexelDef& def = scene.texels[*s.texel];
         auto tree = loadTexelVolume(scene, *s.texel);
+        tree->loadLevels(0);
         if (tree->levels.empty() || tree->levels[0].empty())
             throw InputError(def.volume, "octree has no root");
         t.tau = def.tau;

@@ -11,6 +11,7 @@
 // Then, for closed meshes, the interior is classified top-down over the octree: a node with no
 // surface voxel below it is tested once (its centre, CGAL) and becomes one solid block.
 #include "inside_test.h"
+#include "surface_pass.h"
 
 #include <vtex/core/error.h>
 #include <vtex/core/memory_budget.h>
@@ -30,101 +31,10 @@
 #include <unordered_map>
 
 namespace vtex::sampler {
+
+using namespace detail;
+
 namespace {
-
-using octree::VolumeBlock;
-using octree::VoxelBox;
-using Vec3 = Eigen::Vector3d;
-
-struct Record {
-    std::uint64_t key;
-    std::uint32_t tri;
-    float area;                // voxel units²
-    std::array<float, 3> rgb;  // mean linear colour over the piece
-};
-
-std::uint64_t mix64(std::uint64_t x) {
-    x += 0x9E3779B97F4A7C15ull;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return x ^ (x >> 31);
-}
-
-// Everything the clip phase needs to know about one triangle.
-struct TriangleColour {
-    Eigen::Vector3f factor{1, 1, 1};
-    const ingest::Image* texture = nullptr;
-};
-
-class MeshView {
-public:
-    MeshView(const ingest::TriangleMesh& mesh, double scale, const std::array<double, 3>& offset, double n)
-        : mMesh(mesh) {
-        mPositions.resize(mesh.positions.size());
-        for (std::size_t i = 0; i < mesh.positions.size(); ++i)
-            for (int a = 0; a < 3; ++a)
-                mPositions[i][a] = (double(mesh.positions[i][a]) * scale + offset[std::size_t(a)]) * n;
-        mHasUv = mesh.uvs.size() == mesh.positions.size();
-    }
-
-    const std::vector<Vec3>& positions() const { return mPositions; }
-    Vec3 vertex(std::size_t t, int k) const { return mPositions[mMesh.triangles[t][std::size_t(k)]]; }
-
-    TriangleColour colour(std::size_t t) const {
-        TriangleColour c;
-        const std::size_t m = mMesh.triangleMaterials.empty() ? 0 : mMesh.triangleMaterials[t];
-        if (m < mMesh.materials.size()) {
-            const auto& material = mMesh.materials[m];
-            c.factor = material.baseColorFactor.head<3>();
-            const int tex = material.baseColorTexture;
-            if (mHasUv && tex >= 0 && std::size_t(tex) < mMesh.textures.size()) {
-                const auto& image = mMesh.textures[std::size_t(tex)];
-                if (image.width > 0 && image.height > 0 &&
-                    image.rgba.size() == std::size_t(image.width) * std::size_t(image.height) * 4)
-                    c.texture = &image;
-            }
-        }
-        return c;
-    }
-
-    // Mean linear colour over a piece of triangle t: the texture sampled at the centroid of each
-    // fan triangle of the piece, weighted by its area.
-    Eigen::Vector3f pieceColour(std::size_t t, const TriangleColour& c, const ClipPolygon& piece) const {
-        if (!c.texture) return c.factor;
-        const Vec3 a = vertex(t, 0), e0 = vertex(t, 1) - a, e1 = vertex(t, 2) - a;
-        const double d00 = e0.dot(e0), d01 = e0.dot(e1), d11 = e1.dot(e1);
-        const double denom = d00 * d11 - d01 * d01;
-        const auto& tri = mMesh.triangles[t];
-        const Eigen::Vector2f uv0 = mMesh.uvs[tri[0]], uv1 = mMesh.uvs[tri[1]], uv2 = mMesh.uvs[tri[2]];
-        Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-        double total = 0;
-        for (int i = 1; i + 1 < piece.count; ++i) {
-            const Vec3& p0 = piece.v[0];
-            const Vec3& p1 = piece.v[std::size_t(i)];
-            const Vec3& p2 = piece.v[std::size_t(i + 1)];
-            const double w = 0.5 * (p1 - p0).cross(p2 - p0).norm();
-            const Vec3 d = (p0 + p1 + p2) / 3.0 - a;
-            const double d20 = d.dot(e0), d21 = d.dot(e1);
-            const double beta = denom > 0 ? (d11 * d20 - d01 * d21) / denom : 1.0 / 3;
-            const double gamma = denom > 0 ? (d00 * d21 - d01 * d20) / denom : 1.0 / 3;
-            const Eigen::Vector2f uv =
-                float(1 - beta - gamma) * uv0 + float(beta) * uv1 + float(gamma) * uv2;
-            sum += float(w) * ingest::sampleBaseColour(*c.texture, uv.x(), uv.y());
-            total += w;
-        }
-        if (total <= 0) return c.factor.cwiseProduct(ingest::sampleBaseColour(*c.texture, uv0.x(), uv0.y()));
-        return c.factor.cwiseProduct(sum / float(total));
-    }
-
-private:
-    const ingest::TriangleMesh& mMesh;
-    std::vector<Vec3> mPositions;
-    bool mHasUv = false;
-};
-
-// Pieces below this area (voxel units²) are slivers of exact arithmetic (collinear points on a
-// cutting plane), not surface: at N = 2^20 it is 1e-24 of the unit cube's face.
-constexpr double kMinPieceArea = 1e-12;
 
 bool isPowerOfTwo(std::uint32_t n) { return n != 0 && (n & (n - 1)) == 0; }
 
@@ -189,116 +99,48 @@ std::uint64_t estimateSampleMemory(const ingest::TriangleMesh& mesh, const Sampl
     return std::uint64_t(std::min(bytes, 1.8e19));
 }
 
-octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOptions& options, Progress& progress) {
-    checkOptions(options);
-    if (options.maxMemoryBytes > 0)
-        checkMemoryEstimate(options.source, "sampling at " + std::to_string(options.resolution) + "^3",
-                            estimateSampleMemory(mesh, options), options.maxMemoryBytes);
-    for (const auto& t : mesh.triangles)
-        if (t[0] >= mesh.positions.size() || t[1] >= mesh.positions.size() || t[2] >= mesh.positions.size())
-            throw std::invalid_argument("triangle index out of range");
+namespace detail {
 
-    const std::uint32_t n = options.resolution;
-    const std::uint32_t L = std::uint32_t(std::countr_zero(n));
-    octree::SparseVolume volume;
-    volume.info.levels = L;
-    volume.info.cyclic = options.cyclic;
-    referenceMapping(mesh, options.bounds, volume.info.scale, volume.info.offset);
-    const MeshView view(mesh, volume.info.scale, volume.info.offset, double(n));
-    const std::size_t triangleCount = mesh.triangles.size();
-    volume.info.sourceTriangles = triangleCount;
-
-    // Unit normals and areas (voxel units) of the triangles.
-    std::vector<Vec3> normals(triangleCount);
-    double totalArea = 0;
-    for (std::size_t t = 0; t < triangleCount; ++t) {
-        const Vec3 cross = (view.vertex(t, 1) - view.vertex(t, 0)).cross(view.vertex(t, 2) - view.vertex(t, 0));
-        const double norm = cross.norm();
-        normals[t] = norm > 0 && std::isfinite(norm) ? Vec3(cross / norm) : Vec3::Zero();
-        if (std::isfinite(norm)) totalArea += 0.5 * norm;
-    }
-    volume.info.sourceArea = totalArea / (double(n) * double(n));
-
-    const bool regionOnly = options.region.has_value();
-    const VoxelBox region = regionOnly ? *options.region : VoxelBox{{0, 0, 0}, {n, n, n}};
-
-    // Phase 1: clip.
-    const std::size_t chunkSize = std::max<std::size_t>(1024, (triangleCount + 255) / 256);
-    const std::size_t chunkCount = (triangleCount + chunkSize - 1) / chunkSize;
-    std::vector<std::vector<Record>> chunks(chunkCount);
-    progress.start("sample: clip", triangleCount);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunkCount, 1), [&](const auto& range) {
-        for (std::size_t ci = range.begin(); ci != range.end(); ++ci) {
-            auto& out = chunks[ci];
-            const std::size_t end = std::min(triangleCount, (ci + 1) * chunkSize);
-            for (std::size_t t = ci * chunkSize; t < end; ++t) {
-                if (normals[t].isZero()) continue;
-                const Vec3 a = view.vertex(t, 0), b = view.vertex(t, 1), c = view.vertex(t, 2);
-                if (regionOnly && !options.cyclic) {
-                    const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-                    bool outside = false;
-                    for (int ax = 0; ax < 3; ++ax)
-                        outside = outside || hi[ax] < double(region.min[std::size_t(ax)]) ||
-                                  lo[ax] > double(region.max[std::size_t(ax)]);
-                    if (outside) continue;
-                }
-                const TriangleColour colour = view.colour(t);
-                clipTriangleToGrid(a, b, c, n, options.cyclic,
-                                   [&](std::uint32_t x, std::uint32_t y, std::uint32_t z, const ClipPolygon& piece) {
-                                       if (regionOnly && !region.contains(x, y, z)) return;
-                                       const double area = piece.area();
-                                       if (!(area > kMinPieceArea)) return;
-                                       const Eigen::Vector3f rgb = view.pieceColour(t, colour, piece);
-                                       out.push_back(Record{octree::mortonEncode(x, y, z), std::uint32_t(t),
-                                                            float(area), {rgb.x(), rgb.y(), rgb.z()}});
-                                   });
-            }
-            progress.advance(end - ci * chunkSize);
-        }
-    });
-    progress.finish();
-
-    // Phase 2: scatter into buckets, chunk by chunk.
+Buckets scatterRecords(std::vector<std::vector<Record>>& chunks, std::uint32_t L) {
+    Buckets out;
+    out.chunkCount = chunks.size();
     const std::uint32_t keyBits = 3 * L;
     const std::uint32_t bucketShift = keyBits > 12 ? keyBits - 12 : 0;
-    const std::size_t bucketCount = std::size_t(1) << (keyBits - bucketShift);
-    std::vector<std::uint64_t> offsets(chunkCount * bucketCount + 1, 0);
+    out.bucketCount = std::size_t(1) << (keyBits - bucketShift);
+    const std::size_t chunkCount = out.chunkCount, bucketCount = out.bucketCount;
+    auto& offsets = out.offsets;
+    offsets.assign(chunkCount * bucketCount + 1, 0);
     tbb::parallel_for(std::size_t(0), chunkCount, [&](std::size_t ci) {
         for (const auto& r : chunks[ci]) ++offsets[(r.key >> bucketShift) * chunkCount + ci + 1];
     });
     std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());  // bucket-major, then chunk
-    const std::uint64_t recordCount = offsets.back();
-    std::vector<Record> records(recordCount);
+    out.records.resize(offsets.back());
     tbb::parallel_for(std::size_t(0), chunkCount, [&](std::size_t ci) {
         std::vector<std::uint64_t> cursor(bucketCount);
         for (std::size_t b = 0; b < bucketCount; ++b) cursor[b] = offsets[b * chunkCount + ci];
-        for (const auto& r : chunks[ci]) records[cursor[r.key >> bucketShift]++] = r;
+        for (const auto& r : chunks[ci]) out.records[cursor[r.key >> bucketShift]++] = r;
         std::vector<Record>().swap(chunks[ci]);
     });
+    return out;
+}
 
-    // Phase 3: reduce each bucket.
-    const std::uint64_t fitSamples = options.fitErrorSamples;
-    const std::uint64_t fitThreshold =
-        (fitSamples == 0 || recordCount <= fitSamples)
-            ? ~std::uint64_t(0)
-            : std::uint64_t(double(fitSamples) / double(recordCount) * 18446744073709551615.0);
+SurfaceResult reduceVoxels(Buckets& buckets, const std::vector<Vec3>& normals, std::uint32_t n, std::uint32_t L,
+                           std::uint64_t fitThreshold, Progress& progress) {
     struct BucketOut {
         std::vector<VolumeBlock> voxels;
         double fitSum = 0, fitMax = 0;
         std::uint64_t fitCount = 0;
     };
-    std::vector<BucketOut> buckets(bucketCount);
-    progress.start("sample: voxels", bucketCount);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bucketCount, 4), [&](const auto& range) {
+    std::vector<BucketOut> outs(buckets.bucketCount);
+    progress.start("sample: voxels", buckets.bucketCount);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, buckets.bucketCount, 4), [&](const auto& range) {
         std::vector<Vec3> voxelNormals;
         std::vector<double> weights;
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
-            const auto begin = records.begin() + std::ptrdiff_t(offsets[b * chunkCount]);
-            const auto end = records.begin() + std::ptrdiff_t(offsets[(b + 1) * chunkCount]);
-            std::sort(begin, end, [](const Record& x, const Record& y) {
-                return x.key != y.key ? x.key < y.key : x.tri < y.tri;
-            });
-            BucketOut& out = buckets[b];
+            const auto begin = buckets.records.begin() + std::ptrdiff_t(buckets.offsets[b * buckets.chunkCount]);
+            const auto end = buckets.records.begin() + std::ptrdiff_t(buckets.offsets[(b + 1) * buckets.chunkCount]);
+            std::sort(begin, end, [](const Record& x, const Record& y) { return x.key != y.key ? x.key < y.key : x.tri < y.tri; });
+            BucketOut& out = outs[b];
             for (auto run = begin; run != end;) {
                 auto runEnd = run;
                 double area = 0;
@@ -334,19 +176,76 @@ octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOp
         }
     });
     progress.finish();
-    std::vector<Record>().swap(records);
+    std::vector<Record>().swap(buckets.records);
+    SurfaceResult result;
     std::size_t voxelCount = 0;
-    for (const auto& b : buckets) voxelCount += b.voxels.size();
-    volume.blocks.reserve(voxelCount);
+    for (const auto& b : outs) voxelCount += b.voxels.size();
+    result.voxels.reserve(voxelCount);
     double fitSum = 0;
-    for (auto& b : buckets) {
-        volume.blocks.insert(volume.blocks.end(), b.voxels.begin(), b.voxels.end());
+    for (auto& b : outs) {
+        result.voxels.insert(result.voxels.end(), b.voxels.begin(), b.voxels.end());
         std::vector<VolumeBlock>().swap(b.voxels);
         fitSum += b.fitSum;
-        volume.info.fitError.samples += b.fitCount;
-        volume.info.fitError.max = std::max(volume.info.fitError.max, b.fitMax);
+        result.fit.samples += b.fitCount;
+        result.fit.max = std::max(result.fit.max, b.fitMax);
     }
-    if (volume.info.fitError.samples > 0) volume.info.fitError.mean = fitSum / double(volume.info.fitError.samples);
+    if (result.fit.samples > 0) result.fit.mean = fitSum / double(result.fit.samples);
+    return result;
+}
+
+// The hash threshold of the voxels on which the fit error is measured: about `samples` of them.
+// A function of the mesh's area alone (voxel units², summed in triangle order), not of what the
+// sampling finds, so that a partial re-sampling selects the voxels a full one would: a surface of
+// area A crosses about 1.5·A voxels (the mean of |nx| + |ny| + |nz| over directions is 3/2).
+std::uint64_t fitThreshold(double totalArea, std::uint64_t samples) {
+    const double expected = 1.5 * totalArea;
+    if (samples == 0 || !(expected > double(samples))) return ~std::uint64_t(0);
+    return std::uint64_t(double(samples) / expected * 18446744073709551615.0);
+}
+
+
+SourceView::SourceView(const ingest::TriangleMesh& mesh, const std::array<double, 3>& offset, double scale,
+                       std::uint32_t n)
+    : view(mesh, scale, offset, double(n)), normals(mesh.triangles.size()) {
+    for (std::size_t t = 0; t < normals.size(); ++t) {
+        const Vec3 cross = (view.vertex(t, 1) - view.vertex(t, 0)).cross(view.vertex(t, 2) - view.vertex(t, 0));
+        const double norm = cross.norm();
+        normals[t] = norm > 0 && std::isfinite(norm) ? Vec3(cross / norm) : Vec3::Zero();
+        if (std::isfinite(norm)) totalArea += 0.5 * norm;
+    }
+}
+
+}  // namespace detail
+
+octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOptions& options, Progress& progress) {
+    checkOptions(options);
+    if (options.maxMemoryBytes > 0)
+        checkMemoryEstimate(options.source, "sampling at " + std::to_string(options.resolution) + "^3",
+                            estimateSampleMemory(mesh, options), options.maxMemoryBytes);
+    for (const auto& t : mesh.triangles)
+        if (t[0] >= mesh.positions.size() || t[1] >= mesh.positions.size() || t[2] >= mesh.positions.size())
+            throw std::invalid_argument("triangle index out of range");
+
+    const std::uint32_t n = options.resolution;
+    const std::uint32_t L = std::uint32_t(std::countr_zero(n));
+    octree::SparseVolume volume;
+    volume.info.levels = L;
+    volume.info.cyclic = options.cyclic;
+    referenceMapping(mesh, options.bounds, volume.info.scale, volume.info.offset);
+    const SourceView source(mesh, volume.info.offset, volume.info.scale, n);
+    const MeshView& view = source.view;
+    const std::vector<Vec3>& normals = source.normals;
+    const std::size_t triangleCount = mesh.triangles.size();
+    volume.info.sourceTriangles = triangleCount;
+    volume.info.sourceArea = source.totalArea / (double(n) * double(n));
+
+    const bool regionOnly = options.region.has_value();
+    const VoxelBox region = regionOnly ? *options.region : VoxelBox{{0, 0, 0}, {n, n, n}};
+    const std::uint64_t threshold = fitThreshold(source.totalArea, options.fitErrorSamples);
+    SurfaceResult surface = regionOnly ? sampleSurface(view, normals, n, options.cyclic, RegionFilter{region, options.cyclic}, threshold, progress)
+                                       : sampleSurface(view, normals, n, options.cyclic, AllVoxels{}, threshold, progress);
+    volume.blocks = std::move(surface.voxels);
+    volume.info.fitError = surface.fit;
 
     // Solid interior.
     const bool solid = options.solid == SolidMode::On || (options.solid == SolidMode::Auto && mesh.closed && !options.cyclic);

@@ -162,3 +162,82 @@ TEST(RenderCli, FlagsThatAreNotFiniteNumbersAreRefusedNamingTheFlag) {
         }
     EXPECT_FALSE(fs::exists(out));
 }
+
+namespace {
+
+// The offset and size of section `tag` of a vtex container, from its table (docs/formats.md:
+// a 24-byte header, then 32 bytes a section: tag, reserved, offset, size, checksum).
+std::pair<std::uint64_t, std::uint64_t> sectionSpan(const std::string& bytes, const std::string& tag) {
+    const auto u64 = [&](std::size_t at) {
+        std::uint64_t v = 0;
+        for (int i = 0; i < 8; ++i) v |= std::uint64_t(std::uint8_t(bytes[at + std::size_t(i)])) << (8 * i);
+        return v;
+    };
+    const std::uint32_t count = std::uint32_t(u64(8) >> 32);
+    for (std::uint32_t i = 0; i < count; ++i) {
+        const std::size_t entry = 24 + 32 * std::size_t(i);
+        if (bytes.compare(entry, 4, tag) == 0) return {u64(entry + 8), u64(entry + 16)};
+    }
+    return {0, 0};
+}
+
+std::uint64_t statsNumber(const std::string& json, const std::string& key) {
+    const auto at = json.find("\"" + key + "\":");
+    return at == std::string::npos ? 0 : std::stoull(json.substr(at + key.size() + 3));
+}
+
+void flipByteOf(const fs::path& file, const std::string& tag) {
+    std::string bytes = vtex::test::readText(file);
+    const auto [offset, size] = sectionSpan(bytes, tag);
+    ASSERT_GT(size, 8u) << tag;
+    bytes[offset + size / 2] = char(bytes[offset + size / 2] ^ 0x20);
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+}  // namespace
+
+// `vtex render` reads each level of a .vto when a ray first uses it (octree::openVto): a damaged
+// level no ray uses does not stop it, a damaged level it uses fails cleanly mid-render (exit 3,
+// naming the file and the section, no image), and stats.json says how much of the file it read.
+TEST(RenderCli, ReadsOnlyTheLevelsItUsesAndADamagedUsedLevelExitsThree) {
+    const fs::path dir = makeSceneDir("lazy");
+    const std::string original = vtex::test::readText(dir / "t.vto");
+    const auto render = [&](const std::string& name) {
+        return runVtex({"render", (dir / "scene.toml").string(), "-o", (dir / (name + ".exr")).string(), "--stats",
+                        (dir / (name + ".json")).string(), "--lod-bias", "2", "--threads", "2", "--quiet"});
+    };
+    const auto clean = render("clean");
+    ASSERT_EQ(clean.exitStatus, 0) << clean.err;
+    const std::string stats = vtex::test::readText(dir / "clean.json");
+    const std::uint64_t read = statsNumber(stats, "vto_bytes_read");
+    EXPECT_EQ(statsNumber(stats, "vto_file_bytes"), original.size());
+    // The deepest level read: the one whose section ends where the bytes read do.
+    int deepest = -1;
+    for (int l = 0; l <= 4; ++l) {
+        const auto [offset, size] = sectionSpan(original, "LV0" + std::to_string(l));
+        if (offset + size == read) deepest = l;
+    }
+    ASSERT_GE(deepest, 1) << stats;  // some level is read during the render, not at load
+    ASSERT_LT(deepest, 4) << stats;
+
+    flipByteOf(dir / "t.vto", "LV04");  // unused
+    const auto unused = render("unused");
+    ASSERT_EQ(unused.exitStatus, 0) << unused.err;
+    EXPECT_EQ(vtex::test::readText(dir / "unused.exr"), vtex::test::readText(dir / "clean.exr"));
+
+    std::ofstream(dir / "t.vto", std::ios::binary | std::ios::trunc) << original;
+    const std::string used = "LV0" + std::to_string(deepest);
+    flipByteOf(dir / "t.vto", used);
+    const auto damaged = render("damaged");
+    EXPECT_EQ(damaged.exitStatus, 3) << damaged.err;
+    EXPECT_NE(damaged.err.find("t.vto"), std::string::npos) << damaged.err;
+    EXPECT_NE(damaged.err.find("section '" + used + "'"), std::string::npos) << damaged.err;
+    EXPECT_EQ(vtex::test::lineCount(damaged.err), 1u) << damaged.err;
+    EXPECT_FALSE(fs::exists(dir / "damaged.exr"));
+    // vtex inspect still checks every section at once, the unused one too.
+    std::ofstream(dir / "t.vto", std::ios::binary | std::ios::trunc) << original;
+    flipByteOf(dir / "t.vto", "LV04");
+    const auto inspect = runVtex({"inspect", (dir / "t.vto").string()});
+    EXPECT_EQ(inspect.exitStatus, 3) << inspect.err;
+    EXPECT_NE((inspect.out + inspect.err).find("LV04"), std::string::npos) << inspect.out << inspect.err;
+}

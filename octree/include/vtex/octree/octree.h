@@ -27,6 +27,10 @@
 
 namespace vtex::octree {
 
+namespace detail {
+class LevelLoader;
+}
+
 struct OctreeNode {
     VoxelData data;
     std::uint8_t childMask = 0;    ///< bit c set: child c (see mortonEncode) is stored
@@ -64,11 +68,32 @@ class Octree {
 public:
     OctreeInfo info;
     /// levels[ℓ]: the stored nodes of level ℓ in Morton order; levels[0] holds the root (an
-    /// empty root when the volume is empty). levels.size() = L + 1.
+    /// empty root when the volume is empty). levels.size() = L + 1. A tree opened with openVto
+    /// fills levels[ℓ] only when loadLevels(ℓ' ≥ ℓ) asks for it: call loadLevels before reading
+    /// levels[0 … ℓ] or find(ℓ, …).
     std::vector<std::vector<OctreeNode>> levels;
     std::vector<LevelStats> stats;  ///< one per level
 
-    friend bool operator==(const Octree&, const Octree&) = default;
+    Octree();
+    ~Octree();
+    /// A copy or a move of a tree opened with openVto loads all its levels first: the result is a
+    /// tree read whole. Throws vtex::InputError as loadLevels does.
+    Octree(const Octree& other);
+    Octree(Octree&& other);
+    Octree& operator=(const Octree& other);
+    Octree& operator=(Octree&& other);
+    /// Same info, levels and statistics (every level loaded first).
+    friend bool operator==(const Octree& a, const Octree& b);
+
+    /// Levels 0 … min(level, deepest) in memory: a tree opened with openVto reads and checks
+    /// each level's section the first time one at or below it is asked for (thread-safe; after
+    /// the first call for a level, one atomic load). A no-op for a tree built or read whole.
+    /// Throws vtex::InputError naming the file and the section if the section is damaged (or the
+    /// file was changed in place since it was opened).
+    void loadLevels(std::uint32_t level) const;
+    /// Bytes of its .vto file read so far: the whole file for readVto, the header, statistics and
+    /// loaded levels for openVto; 0 for a tree built in memory.
+    std::uint64_t bytesRead() const;
 
     std::uint32_t levelCount() const { return std::uint32_t(levels.size()); }
     std::uint32_t resolution() const { return std::uint32_t(1) << info.source.levels; }
@@ -81,6 +106,12 @@ public:
     /// Every non-empty voxel of `level` that the compressed tree stands for, each as a block at
     /// `level` (leaves above are replicated): for tests and tools, O(8^level) at worst.
     std::vector<VolumeBlock> expandLevel(std::uint32_t level) const;
+
+private:
+    friend Octree readVto(const std::filesystem::path& file);
+    friend std::shared_ptr<const Octree> openVto(const std::filesystem::path& file);
+    std::unique_ptr<detail::LevelLoader> mLoader;  ///< openVto's open file; null once all is in memory
+    std::uint64_t mBytesRead = 0;                  ///< readVto: the file's size
 };
 
 struct BuildOptions {
@@ -99,6 +130,12 @@ struct BuildOptions {
 class OctreeBuilder {
 public:
     OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress);
+    /// The builder that made `tree`, rebuilt from the tree alone, as if from a finest level with
+    /// `info` (`vtex build --update`): possible when the tree stores every node of its pyramid —
+    /// no node above the finest level merged, as a surface built with tolerance 0 leaves it —
+    /// and no solid block; std::nullopt otherwise. `options` must hold the tree's rule and
+    /// tolerance. updateRegion then compress() give the full build's tree bit for bit.
+    static std::optional<OctreeBuilder> resume(const Octree& tree, const VolumeInfo& info, const BuildOptions& options);
     ~OctreeBuilder();
     OctreeBuilder(OctreeBuilder&&) noexcept;
     OctreeBuilder& operator=(OctreeBuilder&&) noexcept;
@@ -119,6 +156,7 @@ public:
     std::uint64_t filteredNodeCount() const;
 
 private:
+    OctreeBuilder();
     struct Impl;
     std::unique_ptr<Impl> mImpl;
 };
@@ -145,6 +183,14 @@ std::string serializeVto(const Octree& octree);
 /// Parses and validates .vto bytes. Throws vtex::InputError naming the failing section.
 Octree parseVto(std::string_view bytes, const std::filesystem::path& file);
 void writeVto(const Octree& octree, const std::filesystem::path& file);
+/// Reads and checks the whole file (every section's checksum, every level), as `vtex inspect`
+/// and the tools that rewrite a tree need.
 Octree readVto(const std::filesystem::path& file);
+/// Opens `file` for a render: reads and checks the header, the section table, HEAD and STAT now,
+/// and each level's section (its checksum and nodes, as readVto does) on first use
+/// (Octree::loadLevels). The file stays open until the tree is destroyed, so a file replaced
+/// meanwhile (vtex writes by rename) is still read as it was; one changed in place fails its
+/// section's checksum. Throws vtex::InputError naming the file and the failing section.
+std::shared_ptr<const Octree> openVto(const std::filesystem::path& file);
 
 }  // namespace vtex::octree

@@ -136,6 +136,10 @@ struct RenderStats {
     /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:
     /// the deformed copies).
     std::uint64_t referenceTriangles = 0;
+    /// Bytes of the scene's .vto files read (octree::Octree::bytesRead: the header, statistics
+    /// and the levels the render used), and those files' sizes; in-memory octrees count 0.
+    std::uint64_t vtoBytesRead = 0;
+    std::uint64_t vtoFileBytes = 0;
     double meanLevel() const;
 };
 

@@ -53,7 +53,8 @@ struct SampleOptions {
     std::uint64_t maxMemoryBytes = 0;
     /// The mesh's file, named in a vtex::MemoryLimitError.
     std::filesystem::path source;
-    /// Surface voxels on which the fit error is measured (hash-selected sample); 0 = all.
+    /// Surface voxels on which the fit error is measured, about (hash-selected with a threshold
+    /// from the mesh's area, so that updateRegion selects the same ones); 0 = all.
     std::uint64_t fitErrorSamples = 4096;
 };
 
@@ -70,5 +71,26 @@ void referenceMapping(const ingest::TriangleMesh& mesh, BoundsMode bounds, doubl
 /// asked of an open mesh.
 octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOptions& options,
                                 Progress& progress);
+
+/// The partial recompute: `old` (read from `oldFile`) with every voxel inside `options.region`
+/// (finest voxel indices, min inclusive, max exclusive) sampled again from `mesh`, the others
+/// kept, and the fit error measured again on the voxels a full sampling measures it on. When
+/// `old` was sampled with these options from a mesh that differs from `mesh` only by triangles
+/// whose pieces lie inside the region, the result equals sampleMesh(mesh, options without the
+/// region) bit for bit. The work is the region's sampling plus the fit error's few thousand
+/// voxels. Throws vtex::InputError naming `oldFile` when `old` was sampled at another
+/// resolution, cyclic or not, with another mapping to the unit cube, or holds a solid interior
+/// (which the region alone cannot classify); std::invalid_argument as sampleMesh does.
+octree::SparseVolume updateRegion(const ingest::TriangleMesh& mesh, const octree::SparseVolume& old,
+                                  const SampleOptions& options, const std::filesystem::path& oldFile, Progress& progress);
+
+/// The region updateRegion needs for an edit from `before` to `after` (sampled with `options`,
+/// its region ignored): every voxel a triangle that differs touches, in either mesh. Triangles
+/// are compared by what the sampling reads of them (corners, texture coordinates, material) index
+/// by index when the counts agree, else outside their common prefix and suffix. An empty box when
+/// nothing differs; std::nullopt when no region will do: the mapping to the unit cube, a material
+/// or a texture changed (or the texture coordinates appeared or went).
+std::optional<octree::VoxelBox> changedRegion(const ingest::TriangleMesh& before, const ingest::TriangleMesh& after,
+                                              const SampleOptions& options);
 
 }  // namespace vtex::sampler

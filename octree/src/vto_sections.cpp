@@ -1,0 +1,245 @@
+// The .vto sections one by one, and openVto's reading of the levels on first use (see
+// vto_sections.h, docs/formats.md).
+#include "vto_sections.h"
+
+#include <vtex/core/error.h>
+#include <vtex/core/input_file.h>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+namespace vtex::octree::detail {
+namespace {
+
+constexpr std::size_t kNodeRecordSize = 1 + 44;
+constexpr std::size_t kStatRecordSize = 8 * 7;
+
+}  // namespace
+
+std::string levelTag(std::uint32_t l) {
+    char tag[8];
+    std::snprintf(tag, sizeof tag, "LV%02u", l % 100);
+    return tag;
+}
+
+bool isVtoSection(std::string_view tag) {
+    return tag == "HEAD" || tag == "STAT" ||
+           (tag.size() == 4 && tag.substr(0, 2) == "LV" && std::isdigit(static_cast<unsigned char>(tag[2])) &&
+            std::isdigit(static_cast<unsigned char>(tag[3])));
+}
+
+void parseVtoHead(std::string_view payload, Octree& tree, const std::filesystem::path& file) {
+    ByteReader head(payload);
+    tree.info.source = readVolumeInfo(head, file, "HEAD");
+    const std::uint8_t rule = head.u8();
+    tree.info.tolerance = head.f32();
+    const std::uint32_t count = head.u32();
+    const std::string where = sectionLocation("HEAD");
+    if (!head.ok() || head.remaining() != 0) throw InputError(file, "wrong size", where);
+    if (rule > 1) throw InputError(file, "unknown filter rule " + std::to_string(rule), where);
+    tree.info.rule = rule == 0 ? FilterRule::Neyret : FilterRule::Sggx;
+    if (!std::isfinite(tree.info.tolerance) || tree.info.tolerance < 0) throw InputError(file, "invalid tolerance", where);
+    if (count != tree.info.source.levels + 1)
+        throw InputError(file, "level count " + std::to_string(count) + " does not match the resolution", where);
+}
+
+void parseVtoStats(std::string_view payload, Octree& tree, const std::filesystem::path& file) {
+    const std::uint32_t levelCount = tree.info.source.levels + 1;
+    if (payload.size() != kStatRecordSize * levelCount)
+        throw InputError(file, "wrong size for " + std::to_string(levelCount) + " levels", sectionLocation("STAT"));
+    ByteReader r(payload);
+    tree.stats.resize(levelCount);
+    for (auto& s : tree.stats) {
+        s.storedNodes = r.u64();
+        s.occupiedNodes = r.u64();
+        s.meanDensity = r.f64();
+        s.meanOccupiedDensity = r.f64();
+        s.filterErrorMean = r.f64();
+        s.filterErrorMax = r.f64();
+        s.filterErrorSamples = r.u64();
+        if (!std::isfinite(s.meanDensity) || !std::isfinite(s.meanOccupiedDensity) || !std::isfinite(s.filterErrorMean) ||
+            !std::isfinite(s.filterErrorMax))
+            throw InputError(file, "non-finite statistic", sectionLocation("STAT"));
+    }
+}
+
+std::uint64_t parseVtoLevel(std::string_view payload, std::uint32_t l, std::uint64_t expected, const Octree& tree,
+                            std::vector<OctreeNode>& nodes, const std::filesystem::path& file) {
+    const std::uint32_t levelCount = tree.info.source.levels + 1;
+    const std::string where = sectionLocation(levelTag(l));
+    ByteReader r(payload);
+    const std::uint64_t count = r.u64();
+    if (!r.ok() || count > r.remaining() / kNodeRecordSize || count * kNodeRecordSize != r.remaining())
+        throw InputError(file, "size does not match its node count " + std::to_string(count), where);
+    if (count != expected)
+        throw InputError(file, std::to_string(count) + " nodes where the level above has " + std::to_string(expected) +
+                                   " children", where);
+    if (tree.stats[l].storedNodes != count) throw InputError(file, "node count disagrees with STAT", where);
+    nodes.resize(count);
+    std::uint64_t children = 0;
+    for (std::uint64_t i = 0; i < count; ++i) {
+        OctreeNode& node = nodes[i];
+        node.childMask = r.u8();
+        node.data = readVoxelData(r);
+        const std::string nodeWhere = where + ", node " + std::to_string(i);
+        // Only an empty root (an empty volume) may be stored empty.
+        const bool mayBeEmpty = l == 0 && node.childMask == 0;
+        if (const auto problem = checkVoxelData(node.data, mayBeEmpty); !problem.empty())
+            throw InputError(file, problem, nodeWhere);
+        if (l + 1 == levelCount && node.childMask != 0) throw InputError(file, "finest-level node with children", nodeWhere);
+        if (children > std::numeric_limits<std::uint32_t>::max()) throw InputError(file, "too many nodes", nodeWhere);
+        node.firstChild = std::uint32_t(children);
+        children += std::uint64_t(std::popcount(unsigned(node.childMask)));
+    }
+    return children;
+}
+
+LevelLoader::LevelLoader(std::filesystem::path file, int fd, std::vector<TableEntry> levels, std::uint64_t bytesRead)
+    : mFile(std::move(file)),
+      mFd(fd),
+      mLevels(std::move(levels)),
+      mOnce(std::make_unique<std::once_flag[]>(mLevels.size())),
+      mChildren(mLevels.size(), 0),
+      mBytesRead(bytesRead) {}
+
+LevelLoader::~LevelLoader() { ::close(mFd); }
+
+std::string readSection(int fd, const TableEntry& entry, const std::filesystem::path& file) {
+    const std::string where = sectionLocation(printableTag(entry.tag));
+    std::string payload(entry.size, '\0');
+    std::uint64_t done = 0;
+    while (done < entry.size) {
+        const ssize_t n = ::pread(fd, payload.data() + done, entry.size - done, off_t(entry.offset + done));
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw IoError(file, std::string("cannot read ") + where + ": " + std::strerror(errno));
+        // The table said the file was long enough when it was opened: it was truncated since.
+        if (n == 0) throw InputError(file, "truncated since the file was opened", where);
+        done += std::uint64_t(n);
+    }
+    if (checksum(payload) != entry.sum) throw InputError(file, "checksum mismatch", where);
+    return payload;
+}
+
+void LevelLoader::load(std::uint32_t level, Octree& tree) {
+    if (mLevels.empty()) return;
+    const int deepest = int(std::min<std::uint64_t>(level, mLevels.size() - 1));
+    if (deepest <= mDeepestLoaded.load(std::memory_order_acquire)) return;
+    for (int l = 0; l <= deepest; ++l) {
+        std::call_once(mOnce[std::size_t(l)], [&] {
+            const TableEntry& entry = mLevels[std::size_t(l)];
+            mBytesRead.fetch_add(entry.size, std::memory_order_relaxed);
+            const std::string payload = readSection(mFd, entry, mFile);
+            const std::uint64_t expected = l == 0 ? 1 : mChildren[std::size_t(l) - 1];
+            std::vector<OctreeNode> nodes;
+            mChildren[std::size_t(l)] = parseVtoLevel(payload, std::uint32_t(l), expected, tree, nodes, mFile);
+            tree.levels[std::size_t(l)] = std::move(nodes);
+            // Levels load in order, each after the one above: the stores only grow.
+            mDeepestLoaded.store(l, std::memory_order_release);
+        });
+    }
+}
+
+}  // namespace vtex::octree::detail
+
+namespace vtex::octree {
+namespace {
+
+using detail::LevelLoader;
+using detail::TableEntry;
+
+// The first `size` bytes of the open file (fewer if it is shorter).
+std::string readHead(int fd, std::size_t size, const std::filesystem::path& file) {
+    std::string bytes(size, '\0');
+    std::size_t done = 0;
+    while (done < size) {
+        const ssize_t n = ::pread(fd, bytes.data() + done, size - done, off_t(done));
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw IoError(file, std::string("cannot read: ") + std::strerror(errno));
+        if (n == 0) break;
+        done += std::size_t(n);
+    }
+    bytes.resize(done);
+    return bytes;
+}
+
+// The table entries of HEAD, STAT and LV00 … LVnn, checked as readContainer checks them, read
+// from the file's head alone.
+std::vector<TableEntry> readVtoTable(int fd, std::uint64_t fileSize, const std::filesystem::path& file,
+                                     std::uint64_t& headBytes) {
+    using namespace detail;
+    std::string head = readHead(fd, kHeaderSize, file);
+    std::uint32_t count = 0;
+    if (head.size() >= kHeaderSize) {
+        ByteReader r(std::string_view(head).substr(12));
+        count = std::min(r.u32(), kMaxSections);  // readTable refuses more
+        head = readHead(fd, kHeaderSize + kTableEntrySize * count, file);
+    }
+    headBytes = head.size();
+    std::uint32_t version = 0;
+    std::vector<TableEntry> entries;
+    std::string location;
+    if (const std::string problem = readTable(head, fileSize, kVtoMagic, kVtoVersion, version, entries, location);
+        !problem.empty())
+        throw InputError(file, problem, location);
+    const std::uint64_t end = entries.empty() ? kHeaderSize : entries.back().offset + entries.back().size;
+    if (end != fileSize)
+        throw InputError(file, std::to_string(fileSize - end) + " unexpected bytes after the last section", "end of file");
+    std::vector<InSection> tags;
+    for (const auto& entry : entries) tags.push_back({entry.tag, {}});
+    requireKnownSections(tags, isVtoSection, file);
+    return entries;
+}
+
+const TableEntry& requireEntry(const std::vector<TableEntry>& entries, std::string_view tag,
+                               const std::filesystem::path& file) {
+    for (const auto& entry : entries)
+        if (entry.tag == tag) return entry;
+    throw InputError(file, "missing", detail::sectionLocation(tag));
+}
+
+}  // namespace
+
+std::shared_ptr<const Octree> openVto(const std::filesystem::path& file) {
+    using namespace detail;
+    checkInputFile(file, std::uint64_t(1) << 40, "file");  // the same refusals as readVto's
+    // Closes the descriptor unless the loader has taken it.
+    struct Descriptor {
+        int fd;
+        ~Descriptor() {
+            if (fd >= 0) ::close(fd);
+        }
+    } descriptor{::open(file.c_str(), O_RDONLY | O_CLOEXEC)};
+    const int fd = descriptor.fd;
+    if (fd < 0) throw IoError(file, std::string("cannot open for reading: ") + std::strerror(errno));
+    struct stat status {};
+    if (::fstat(fd, &status) != 0 || !S_ISREG(status.st_mode)) throw InputError(file, "file is not a regular file");
+    std::uint64_t bytesRead = 0;
+    const std::vector<TableEntry> entries = readVtoTable(fd, std::uint64_t(status.st_size), file, bytesRead);
+    auto tree = std::make_shared<Octree>();
+    for (const char* tag : {"HEAD", "STAT"}) {
+        const TableEntry& entry = requireEntry(entries, tag, file);
+        const std::string payload = readSection(fd, entry, file);
+        bytesRead += entry.size;
+        if (tag == std::string_view("HEAD")) parseVtoHead(payload, *tree, file);
+        else parseVtoStats(payload, *tree, file);
+    }
+    const std::uint32_t levelCount = tree->info.source.levels + 1;
+    std::vector<TableEntry> levels;
+    for (std::uint32_t l = 0; l < levelCount; ++l) levels.push_back(requireEntry(entries, levelTag(l), file));
+    tree->mLoader = std::make_unique<LevelLoader>(file, fd, std::move(levels), bytesRead);
+    descriptor.fd = -1;
+    tree->levels.resize(levelCount);
+    return tree;
+}
+
+}  // namespace vtex::octree

@@ -1,0 +1,108 @@
+// See partial_sample.h.
+#include "partial_sample.h"
+
+#include "content_hash.h"
+
+#include <vtex/core/error.h>
+#include <vtex/ingest/ingest.h>
+#include <vtex/octree/octree.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <fstream>
+
+namespace vtex::pipelines::detail {
+namespace {
+
+// The earlier run's mesh and volume when its manifest vouches for both and for the parameters.
+struct Earlier {
+    ingest::TriangleMesh mesh;
+    octree::SparseVolume volume;
+    std::string volumeHash;
+};
+
+std::optional<Earlier> readEarlier(const EarlierSample& earlier) {
+    std::ifstream in(earlier.manifest);
+    if (!in) return std::nullopt;
+    try {
+        const nlohmann::json j = nlohmann::json::parse(in);
+        if (j.at("details").at("parameters").get<std::string>() != earlier.parameters) return std::nullopt;
+        const auto& outputs = j.at("outputs");
+        const std::string volumeHash = outputs.at("volume").at("hash").get<std::string>();
+        if (hashFile(earlier.volume) != volumeHash ||
+            hashFile(earlier.sampledMesh) != outputs.at("sampled_mesh").at("hash").get<std::string>())
+            return std::nullopt;
+        return Earlier{ingest::loadMesh(earlier.sampledMesh), octree::readVtl(earlier.volume), volumeHash};
+    } catch (const std::exception&) {
+        return std::nullopt;  // no earlier run to start from: sample in full
+    }
+}
+
+}  // namespace
+
+SampleResult sampleOrUpdate(const ingest::TriangleMesh& mesh, const sampler::SampleOptions& options,
+                            const EarlierSample& earlier, Progress& progress) {
+    if (const auto before = readEarlier(earlier)) {
+        const auto region = sampler::changedRegion(before->mesh, mesh, options);
+        const double n = double(options.resolution);
+        if (region && double(region->max[0] - region->min[0]) * double(region->max[1] - region->min[1]) *
+                              double(region->max[2] - region->min[2]) < 0.5 * n * n * n) {
+            sampler::SampleOptions partial = options;
+            partial.region = region;
+            try {
+                return {sampler::updateRegion(mesh, before->volume, partial, earlier.volume, progress), region,
+                        before->volumeHash};
+            } catch (const InputError&) {
+                // Sampled otherwise (a solid interior, say): the full sampling below.
+            }
+        }
+    }
+    return {sampler::sampleMesh(mesh, options, progress), std::nullopt, {}};
+}
+
+namespace {
+
+// The earlier build's tree when its manifest vouches for it, names `parameters` and says it
+// built the volume with hash `volumeHash`.
+std::optional<octree::Octree> readEarlierTree(const EarlierBuild& earlier, const std::string& volumeHash) {
+    std::ifstream in(earlier.manifest);
+    if (!in) return std::nullopt;
+    try {
+        const nlohmann::json j = nlohmann::json::parse(in);
+        const auto& details = j.at("details");
+        if (details.at("parameters").get<std::string>() != earlier.parameters ||
+            details.at("volume").get<std::string>() != volumeHash ||
+            hashFile(earlier.octree) != j.at("outputs").at("octree").at("hash").get<std::string>())
+            return std::nullopt;
+        return octree::readVto(earlier.octree);
+    } catch (const std::exception&) {
+        return std::nullopt;  // no earlier build to start from: build in full
+    }
+}
+
+}  // namespace
+
+octree::Octree buildOrUpdate(octree::SparseVolume volume, const octree::BuildOptions& options,
+                             const std::optional<octree::VoxelBox>& region, const std::string& updatedFrom,
+                             const EarlierBuild& earlier, Progress& progress, bool& updated) {
+    updated = false;
+    if (region && !updatedFrom.empty())
+        if (const auto old = readEarlierTree(earlier, updatedFrom)) {
+            auto builder = octree::OctreeBuilder::resume(*old, volume.info, options);
+            const bool solid = std::any_of(volume.blocks.begin(), volume.blocks.end(), [](const auto& b) { return b.isSolid(); });
+            if (builder && !solid && old->info.rule == options.rule && old->info.tolerance == float(options.tolerance)) {
+                std::vector<octree::VolumeBlock> inside;
+                for (const auto& b : volume.blocks) {
+                    const auto c = octree::mortonDecode(b.key);
+                    if (region->contains(c[0], c[1], c[2])) inside.push_back(b);
+                }
+                builder->updateRegion(*region, std::move(inside), progress);
+                updated = true;
+                return builder->compress(progress);
+            }
+        }
+    return octree::buildOctree(std::move(volume), options, progress);
+}
+
+}  // namespace vtex::pipelines::detail
