@@ -169,8 +169,13 @@ std::vector<int> addSurface(tinygltf::Model& model, const render::Scene& scene, 
         const std::uint32_t b = base.add(p[0]), c1 = base.add(p[1]), c2 = base.add(p[2]), c3 = base.add(p[3]);
         base.triangles.insert(base.triangles.end(), {b, c1, c3});
         if (!mesh->isTriangle(f)) base.triangles.insert(base.triangles.end(), {b, c3, c2});
-        if (def.texel)
-            addCell(cells, render::TrilinearCell(p, n, def.height, def.placement == render::Placement::Under));
+        if (!def.texel) continue;
+        const render::TrilinearCell cell(p, n, def.height, def.placement == render::Placement::Under);
+        // glTF positions are floats: a shell whose top lies beyond them would be written as inf.
+        for (const Vec3& corner : cell.corners())
+            if (!(corner.cwiseAbs().maxCoeff() <= double(std::numeric_limits<float>::max())))
+                throw InputError(def.mesh, "face " + std::to_string(f) + ": its shell reaches beyond the float range");
+        addCell(cells, cell);
     }
     summary.faces += mesh->quads.size();
     const auto& d = def.material.diffuse;

@@ -151,6 +151,17 @@ TEST(LayoutGlb, BadUsageAndBadScenesAreRefused) {
     EXPECT_NE(r.err.find("missing.obj"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "x.glb"));
     EXPECT_FALSE(fs::exists(dir / "x.vdb"));
+
+    // A face at the float limit under a shell of 1e30: the cell's top is beyond what glTF holds.
+    std::ofstream(dir / "edge.obj") << "v 0 0 3.4028234663852886e38\nv 1 0 3.4028234663852886e38\n"
+                                       "v 1 1 3.4028234663852886e38\nv 0 1 3.4028234663852886e38\nf 1 2 3 4\n";
+    std::ofstream(dir / "edge.toml") << "[camera]\nposition = [0, -6, 3]\nlook_at = [0, 0, 0]\n"
+                                        "[[texel]]\nname = \"t\"\nvolume = \"t.vto\"\n"
+                                        "[[surface]]\nmesh = \"edge.obj\"\ntexel = \"t\"\nheight = 1e30\n";
+    const auto edge = test::runVtex({"export", (dir / "edge.toml").string(), "-o", (dir / "x.glb").string()});
+    EXPECT_EQ(edge.exitStatus, 3) << edge.err;
+    EXPECT_NE(edge.err.find("beyond the float range"), std::string::npos) << edge.err;
+    EXPECT_FALSE(fs::exists(dir / "x.glb"));
 }
 
 }  // namespace
