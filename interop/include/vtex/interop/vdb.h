@@ -10,7 +10,8 @@
 /// stored leaf above it a constant region, filled as OpenVDB tiles where its nodes allow
 /// (level_export.h). Voxel size 2^−L reference units times `scale`.
 ///
-/// No OpenVDB type appears here: its headers cost ~22 s a translation unit and stay in vdb.cpp.
+/// No OpenVDB type appears here: its headers cost ~22 s a translation unit and stay in
+/// src/vdb_grids.cpp, compiled into the module vtex_vdb.so that writeVdb loads (src/vdb_module.h).
 #pragma once
 
 #include <vtex/octree/octree.h>
