@@ -9,6 +9,10 @@ packages=(
   libembree-dev libopenexr-dev libimath-dev libtbb-dev libeigen3-dev libcli11-dev
   nlohmann-json3-dev libfmt-dev libspdlog-dev libpng-dev libjpeg-dev libxxhash-dev
   libtomlplusplus-dev libgtest-dev libgmock-dev libbenchmark-dev
+  # OpenVDB, for `vtex export` to .vdb: optional to CMake (a build without it refuses .vdb),
+  # installed here so that every build has it and its tests run. Its Find-module fails without
+  # Boost.Iostreams, which Debian's libopenvdb-dev does not depend on.
+  libopenvdb-dev libboost-iostreams-dev
 )
 # Extra packages a caller asks for (the tests want Debian's sample models).
 packages+=("$@")

@@ -152,6 +152,8 @@ std::vector<Output> outputTable(const Workspace& w) {
         {"ingest --report", {"ingest", glb, "-o", (w.out / "m.glb").string(), "--report", "OUT"}, {glb}},
         {"sample -o", {"sample", glb, "-o", "OUT", "-r", "8", "--cyclic"}, {glb}},
         {"build -o", {"build", vtl, "-o", "OUT"}, {vtl}},
+        {"export -o", {"export", (w.in / "grass.vto").string(), "-o", "OUT"}, {w.in / "grass.vto"}},
+        {"export -o (layout)", {"export", scene, "-o", "OUT"}, sceneFiles},
         {"compare --diff", {"compare", a, b, "--diff", "OUT"}, {a, b}},
         {"run -o", {"run", pipeline, "-o", "OUT"}, {pipeline}, true},
         {"demo -o", {"demo", "-o", "OUT", "--resolution", "4", "--scale", "0.05"}, {}, true},
