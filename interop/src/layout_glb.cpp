@@ -110,21 +110,6 @@ int addNode(tinygltf::Model& model, const std::string& name, const Geometry& g, 
     return int(model.nodes.size() - 1);
 }
 
-// The corners of a base face as the renderer takes them (render/src/footprint.h,
-// baseFaceCorners): QuadMesh stores a quad counter-clockwise, P00 P10 P11 P01, and the patch and
-// cell want P00 P10 P01 P11. A missing normal is +z, as there.
-bool faceCorners(const ingest::QuadMesh& mesh, std::size_t face, std::array<Vec3, 4>& p, std::array<Vec3, 4>& n) {
-    const auto& q = mesh.quads[face];
-    const std::uint32_t order[4] = {q[0], q[1], q[3], q[2]};
-    for (std::size_t c = 0; c < 4; ++c) {
-        if (order[c] >= mesh.positions.size()) return false;
-        p[c] = mesh.positions[order[c]].cast<double>();
-        n[c] = order[c] < mesh.normals.size() ? mesh.normals[order[c]].cast<double>() : Vec3(0, 0, 1);
-        if (!p[c].allFinite() || !n[c].allFinite()) return false;
-    }
-    return true;
-}
-
 // A cell's hexahedron: its corners (index i + 2j + 4k for u = i, v = j, w = k), its six
 // faces as two triangles each, its twelve edges.
 void addCell(Geometry& g, const render::TrilinearCell& cell) {
@@ -164,7 +149,7 @@ std::vector<int> addSurface(tinygltf::Model& model, const render::Scene& scene, 
     Geometry base, cells;
     for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
         std::array<Vec3, 4> p, n;
-        if (!faceCorners(*mesh, f, p, n))
+        if (!ingest::patchCorners(*mesh, f, p, n))  // as the renderer places cells
             throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
         const std::uint32_t b = base.add(p[0]), c1 = base.add(p[1]), c2 = base.add(p[2]), c3 = base.add(p[3]);
         base.triangles.insert(base.triangles.end(), {b, c1, c3});

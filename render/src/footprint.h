@@ -28,20 +28,10 @@ inline double localScale(const TrilinearCell& cell, const Vec3& r, double repeat
     return scale > 0 && std::isfinite(scale) ? scale : cell.size() / std::max(repeatU, repeatV);
 }
 
-/// The corners of base face `face` in the order of the bilinear patch (P00, P10, P01, P11:
-/// QuadMesh stores them counter-clockwise, P00, P10, P11, P01) and their normals. False when a
-/// corner index is out of range or a value is not finite.
+/// The corners of base face `face` in the order of the bilinear patch (ingest::patchCorners).
 inline bool baseFaceCorners(const ingest::QuadMesh& mesh, std::size_t face, std::array<Vec3, 4>& p,
                             std::array<Vec3, 4>& n) {
-    const auto& q = mesh.quads[face];
-    const std::uint32_t order[4] = {q[0], q[1], q[3], q[2]};
-    for (std::size_t c = 0; c < 4; ++c) {
-        if (order[c] >= mesh.positions.size()) return false;
-        p[c] = mesh.positions[order[c]].cast<double>();
-        n[c] = order[c] < mesh.normals.size() ? mesh.normals[order[c]].cast<double>() : Vec3(0, 0, 1);
-        if (!p[c].allFinite() || !n[c].allFinite()) return false;
-    }
-    return true;
+    return ingest::patchCorners(mesh, face, p, n);
 }
 
 }  // namespace vtex::render::detail

@@ -30,6 +30,23 @@ struct QuadMesh {
     bool isTriangle(std::size_t face) const { return quads[face][3] == quads[face][2]; }
 };
 
+/// The corners of face `face` in the order of its bilinear patch, P00, P10, P01, P11 (a quad is
+/// stored counter-clockwise, P00 P10 P11 P01), and their normals (+z where the mesh has none):
+/// what the renderers and the layout export place a cell on. False when a corner index is out of
+/// range or a value is not finite.
+inline bool patchCorners(const QuadMesh& mesh, std::size_t face, std::array<Eigen::Vector3d, 4>& p,
+                         std::array<Eigen::Vector3d, 4>& n) {
+    const auto& q = mesh.quads[face];
+    const std::uint32_t order[4] = {q[0], q[1], q[3], q[2]};
+    for (std::size_t c = 0; c < 4; ++c) {
+        if (order[c] >= mesh.positions.size()) return false;
+        p[c] = mesh.positions[order[c]].cast<double>();
+        n[c] = order[c] < mesh.normals.size() ? mesh.normals[order[c]].cast<double>() : Eigen::Vector3d(0, 0, 1);
+        if (!p[c].allFinite() || !n[c].allFinite()) return false;
+    }
+    return true;
+}
+
 /// Loads a base mesh from .obj/.off/.ply/.stl (OpenMesh PolyMesh) or .gltf/.glb (whose
 /// triangles become collapsed quads), keeping quads as quads. The same limits and checks as
 /// loadMesh() apply (untrusted input; one-line InputError naming the file and the problem).
