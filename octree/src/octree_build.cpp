@@ -215,16 +215,6 @@ struct OctreeBuilder::Impl {
         progress.finish();
     }
 
-    // Children of pyramid node `parent` at level `level`: [begin, end) in levels[level + 1].
-    std::pair<std::size_t, std::size_t> childRange(std::uint32_t level, std::uint64_t parentKey) const {
-        const Level& c = levels[level + 1];
-        const auto lo = std::lower_bound(c.begin(), c.end(), parentKey << 3,
-                                         [](const PNode& n, std::uint64_t k) { return n.key < k; });
-        auto hi = lo;
-        while (hi != c.end() && (hi->key >> 3) == parentKey) ++hi;
-        return {std::size_t(lo - c.begin()), std::size_t(hi - c.begin())};
-    }
-
     // Where each node's children start in levels[level + 1], and one past the last node's: the
     // children of node i are [starts[i], starts[i + 1]). One linear walk, since both levels are
     // sorted by key and every node below the root has its parent in the pyramid.
@@ -278,7 +268,7 @@ struct OctreeBuilder::Impl {
         std::vector<Range> below, current;
         for (std::uint32_t l = L; l-- > 0;) {
             const Level& level = levels[l];
-            const auto childRange = [&](std::size_t c) {
+            const auto rangeOfChild = [&](std::size_t c) {
                 return l + 1 == L ? pointRange(levels[L][c].data) : below[c];
             };
             collapsible[l].assign(level.size(), 0);
@@ -296,11 +286,11 @@ struct OctreeBuilder::Impl {
                 }
                 const std::size_t b = starts[l][i], e = starts[l][i + 1];
                 bool ok = true;
-                Range r = childRange(b);
+                Range r = rangeOfChild(b);
                 if (e - b < 8) r.dmin = 0;  // missing children are empty
                 for (std::size_t c = b; c < e && ok; ++c) {
                     ok = collapsible[l + 1][c] != 0;
-                    const Range cr = childRange(c);
+                    const Range cr = rangeOfChild(c);
                     r.dmin = std::min(r.dmin, cr.dmin);
                     r.dmax = std::max(r.dmax, cr.dmax);
                     for (int k = 0; k < 6; ++k) {
@@ -385,7 +375,8 @@ struct OctreeBuilder::Impl {
     }
 
     // Measures the filter error of the sampled nodes that lack it; returns per-level stats.
-    void measureFilterErrors(std::vector<LevelStats>& stats) {
+    // `starts[l]`: childStarts(l).
+    void measureFilterErrors(const std::vector<std::vector<std::uint32_t>>& starts, std::vector<LevelStats>& stats) {
         for (std::uint32_t l = 0; l < L(); ++l) {
             Level& level = levels[l];
             std::uint64_t count = 0;
@@ -400,7 +391,7 @@ struct OctreeBuilder::Impl {
                                   for (std::size_t s = range.begin(); s != range.end(); ++s) {
                                       PNode& node = level[selected[s]];
                                       if (!std::isnan(node.filterError)) continue;
-                                      const auto [b, e] = childRange(l, node.key);
+                                      const std::size_t b = starts[l][selected[s]], e = starts[l][selected[s] + 1];
                                       node.filterError =
                                           float(measureFilterError(&levels[l + 1][b], e - b, options.rule, f));
                                   }
@@ -570,9 +561,9 @@ Octree OctreeBuilder::compress(Progress& progress) const {
     tree.stats.assign(L + 1, {});
     progress.start("compress", L + 1);
     m.levelStats(tree.stats);
-    mImpl->measureFilterErrors(tree.stats);
     std::vector<std::vector<std::uint32_t>> starts(L);
     tbb::parallel_for(std::uint32_t(0), L, [&](std::uint32_t l) { starts[l] = m.childStarts(l); });
+    mImpl->measureFilterErrors(starts, tree.stats);
     m.storeTree(m.collapsibleNodes(starts, progress), starts, tree);
     for (std::uint32_t l = 0; l <= L; ++l) tree.stats[l].storedNodes = tree.levels[l].size();
     progress.finish();

@@ -1,5 +1,7 @@
 // The sparse octree: filtering, compression, lossless tolerance 0, partial recompute.
 #include <vtex/octree/cursor.h>
+#include "random_volume.h"
+
 #include <vtex/octree/octree.h>
 
 #include <gtest/gtest.h>
@@ -12,30 +14,8 @@
 namespace vtex::octree {
 namespace {
 
-VoxelData randomVoxel(std::mt19937& rng) {
-    std::uniform_real_distribution<double> u(0.05, 1.0);
-    VoxelData d;
-    d.density = float(u(rng) * 10);
-    Eigen::Quaterniond q(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
-    packEllipsoid(Ellipsoid::fromAxes(q.normalized().toRotationMatrix(), Vec3(u(rng), u(rng), u(rng))), d);
-    d.albedo = {float(u(rng)), float(u(rng)), float(u(rng))};
-    return d;
-}
-
-// A random sparse surface-like volume: `count` random voxels.
-SparseVolume randomVolume(std::uint32_t levels, std::size_t count, unsigned seed) {
-    std::mt19937 rng(seed);
-    SparseVolume v;
-    v.info.levels = levels;
-    const std::uint32_t n = 1u << levels;
-    std::uniform_int_distribution<std::uint32_t> c(0, n - 1);
-    std::vector<std::uint64_t> keys;
-    for (std::size_t i = 0; i < count; ++i) keys.push_back(mortonEncode(c(rng), c(rng), c(rng)));
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    for (auto k : keys) v.blocks.push_back(VolumeBlock{k, std::uint8_t(levels), 0, randomVoxel(rng)});
-    return v;
-}
+using test::randomVolume;
+using test::randomVoxel;
 
 // Solid half-space x + 2y + 3z < 3N: a constant region with a slanted boundary.
 SparseVolume halfSpace(std::uint32_t levels) {

@@ -1,5 +1,7 @@
 // openVto: a .vto read a level at a time. The same tree as readVto's, bytes read that add up
 // section by section, a damaged level refused only when it is used, concurrent first uses.
+#include "random_volume.h"
+
 #include <vtex/core/error.h>
 #include <vtex/octree/octree.h>
 
@@ -19,24 +21,8 @@ namespace fs = std::filesystem;
 
 // A volume of 2^6 voxels a side with voxels scattered over it: every level holds nodes.
 Octree scatteredOctree(unsigned seed) {
-    std::mt19937 rng(seed);
-    std::uniform_int_distribution<std::uint32_t> c(0, 63);
-    std::uniform_real_distribution<double> u(0.05, 1.0);
-    SparseVolume v;
-    v.info.levels = 6;
-    std::vector<std::uint64_t> keys;
-    for (int i = 0; i < 3000; ++i) keys.push_back(mortonEncode(c(rng), c(rng), c(rng)));
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    for (const auto key : keys) {
-        VoxelData d;
-        d.density = float(u(rng) * 4);
-        packEllipsoid(Ellipsoid::fromAxes(Mat3::Identity(), Vec3(u(rng), u(rng), u(rng))), d);
-        d.albedo = {float(u(rng)), float(u(rng)), float(u(rng))};
-        v.blocks.push_back(VolumeBlock{key, 6, 0, d});
-    }
     NullProgress progress;
-    return buildOctree(v, {}, progress);
+    return buildOctree(test::randomVolume(6, 3000, seed), {}, progress);
 }
 
 fs::path writeTree(const Octree& tree, const std::string& name) {

@@ -38,8 +38,9 @@ std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<cons
 /// The matrix `rule` averages for a stored voxel, read from its eigen-form (R, σ) without
 /// rebuilding its Ellipsoid: the octree build's per-child cost. For Sggx it takes the stored
 /// normalisation as exact: packEllipsoid normalises before rounding σ to float, so the
-/// unpacked primitive's exact mean area is 1 within float rounding (OctreeFilter tests bound
-/// it at 1e-6 on sampled voxels). Empty for an empty voxel or a zero σ.
+/// unpacked primitive's exact mean area is 1 within float rounding (bounded at 1e-6 by
+/// Filtering.StoredFormsGiveTheParentTheEllipsoidsGive and, on the bush's voxels, by
+/// Sampler.BushParentsAreTheFilterOfTheirChildrenRebuiltAsEllipsoids). Empty for an empty voxel or a zero σ.
 std::optional<Mat3> storedFilterForm(const VoxelData& voxel, FilterRule rule);
 
 /// A fixed, deterministic set of unit directions spread evenly over the sphere (a spherical
