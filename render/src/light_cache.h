@@ -58,6 +58,8 @@ public:
         return -1;
     }
     const Grid& grid(int prim) const { return mGrids[std::size_t(prim)]; }
+    /// No lattice at all (no directional light, or too many nodes).
+    bool empty() const { return mDirections.empty(); }
 
     /// T at cell coordinates r (clamped to [0,1]³) of primitive `prim` (which must have a
     /// grid), interpolated from the nodes; fill(node r) computes a missing node.

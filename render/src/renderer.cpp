@@ -33,6 +33,7 @@ ApproximationBudget ApproximationBudget::exact() {
     ApproximationBudget b;
     b.shareShadowRays = false;
     b.shadowCacheResolution = 0;
+    b.chainLatticeNodes = false;
     b.blendCutoff = 0;
     b.reflectanceReuseWeight = 0;
     b.exactFloorShadowAbove = 0;
@@ -45,7 +46,8 @@ bool ApproximationBudget::isExact() const { return *this == exact(); }
 std::string ApproximationBudget::key() const {
     std::ostringstream k;
     k.precision(17);
-    k << "share_shadow_rays " << shareShadowRays << " shadow_cache_resolution " << shadowCacheResolution << " blend_cutoff "
+    k << "share_shadow_rays " << shareShadowRays << " shadow_cache_resolution " << shadowCacheResolution
+      << " chain_lattice_nodes " << chainLatticeNodes << " blend_cutoff "
       << blendCutoff << " reflectance_reuse_weight " << reflectanceReuseWeight << " exact_floor_shadow_above "
       << exactFloorShadowAbove << " shadow_refresh " << shadowRefresh;
     return k.str();

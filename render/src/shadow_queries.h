@@ -8,6 +8,7 @@
 #include <vtex/render/scene.h>
 #include <vtex/render/texel_march.h>
 
+#include "cell_adjacency.h"
 #include "frame.h"
 #include "light_cache.h"
 #include "texel_runtime.h"
@@ -17,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -83,44 +85,61 @@ public:
             if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
             lr /= len;
         }
-        const Vec3 p0 = tile(r, surface);
-        double step = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
-        // Not past the cell's sides: the lattice looked up where the march ends is this cell's.
-        const double extent[2] = {surface.repeatU, surface.repeatV};
-        for (int a = 0; a < 2; ++a) {
-            if (lr[a] > 0) step = std::min(step, std::max(0.0, (extent[a] - p0[a]) / lr[a]));
-            else if (lr[a] < 0) step = std::min(step, std::max(0.0, -p0[a] / lr[a]));
-        }
-        bool floor = false;
-        if (p0.z() + step * lr.z() > 1) step = std::max(0.0, (1 - p0.z()) / lr.z());
-        if (p0.z() + step * lr.z() < 0) {
-            step = std::max(0.0, -p0.z() / lr.z());
-            floor = true;  // the step reaches the base surface, which blocks
-        }
-        const Vec3 p1 = p0 + step * lr;
         const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim.cell, r, surface)));
-        const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level, kTransmittanceCutoff);
+        const CellMarch near = marchInCell(texel, surface, tile(r, surface), lr,
+                                           kExactLatticeSteps / double(mLightCache.grid(primIndex).nw), level);
         counters.voxels += near.blocks;
-        if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
-        const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
-        return near.transmittance * cachedShadow(slot, primIndex, rEnd, l);
+        if (near.exitFace == 0 || near.transmittance <= kTransmittanceCutoff) return 0;
+        return near.transmittance * cachedShadow(slot, primIndex, near.end, l);
     }
 
-    // The lattice's value at cell coordinates r of primitive `primIndex`. A node is one exact
-    // shadow ray from its point, at the level of the lattice's spacing; node rays are shared by
-    // all pixels, so they are not counted in any tile's statistics (which would then depend on
-    // which tile came first).
-    double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l) const {
-        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
-        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
-        const double spacing = 1.0 / double(mLightCache.grid(primIndex).nw);
+    // The lattice's value at cell coordinates r of primitive `primIndex`. Node values are shared
+    // by all pixels, so their work is not counted in any tile's statistics (which would then
+    // depend on which tile came first). `depth`: how many cells a node's chain has crossed.
+    double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, int depth = 0) const {
         return mLightCache.lookup(slot, primIndex, r, [&](const Vec3& node) {
             // Nodes on the cell's faces move in by a hair, so that the ray starts inside.
             const Vec3 rn = node.cwiseMax(Vec3::Constant(1e-4)).cwiseMin(Vec3::Constant(1 - 1e-4));
-            Counters uncounted;
-            return tracedShadow(prim.cell.map(rn), l, std::numeric_limits<double>::infinity(),
-                                localScale(prim.cell, rn, surface) * spacing, primIndex, rn, uncounted);
+            return nodeTransmittance(slot, primIndex, rn, l, depth);
         });
+    }
+
+    // A lattice node's transmittance toward the light, chained through the cells (issue 12): the
+    // march through its own cell, at the level of the lattice's spacing, up to where the light
+    // ray leaves the cell, times what lies beyond: the neighbour's lattice looked up on the shared
+    // face when the ray leaves through a side into a cell that has one (its face nodes, chained
+    // the same way), otherwise one exact shadow ray from the exit point. A node thus costs one
+    // cell's march instead of a ray walked through the BVH cell by cell (on the bush field's far
+    // view node rays were a third of the render). An approximation on top of the lattice: the
+    // face's bilinear interpolation between its nodes, once per cell crossed. Chains longer than
+    // kMaxChain cells (a grazing light over cells much smaller than their shell), nodes where
+    // the hybrid would trace the mesh, and every node when ApproximationBudget::chainLatticeNodes
+    // is off take the exact ray from the node itself.
+    double nodeTransmittance(int slot, int primIndex, const Vec3& rn, const Vec3& l, int depth) const {
+        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
+        const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
+        const double spacing = 1.0 / double(mLightCache.grid(primIndex).nw);
+        Counters uncounted;
+        const auto exactFrom = [&](const Vec3& r) {
+            return tracedShadow(prim.cell.map(r), l, std::numeric_limits<double>::infinity(),
+                                localScale(prim.cell, r, surface) * spacing, primIndex, r, uncounted);
+        };
+        const LevelChoice choice = chooseLevel(spacing, mOptions.lodBias, texel.volume->maxLevel());
+        if (depth >= kMaxChain || texel.meshWeight(choice.requested) > 0 ||
+            !mOptions.approximations.chainLatticeNodes)
+            return exactFrom(rn);
+        Vec3 lr = tiledJacobian(prim.cell, rn, surface).inverse() * l;
+        const double len = lr.norm();
+        if (!(len > 0) || !std::isfinite(len)) return exactFrom(rn);
+        lr /= len;
+        const CellMarch m = marchInCell(texel, surface, tile(rn, surface), lr, std::numeric_limits<double>::infinity(),
+                                        shadowLevel(texel, choice));
+        if (m.exitFace == 0 || m.transmittance <= kTransmittanceCutoff) return 0;
+        const CellNeighbour& next = m.exitFace >= 2 ? mAdjacency.across(primIndex, m.exitFace) : CellNeighbour{};
+        if (next.prim < 0 || mLightCache.grid(next.prim).nw <= 0) return m.transmittance * exactFrom(m.end);
+        return m.transmittance *
+               cachedShadow(slot, next.prim, CellAdjacency::toNeighbour(next, m.exitFace, m.end), l, depth + 1);
     }
 
     // The exact path: one ray toward the light.
@@ -160,7 +179,48 @@ public:
         return std::max(texel.coarsestShadowLevel, choice.fineWeight < 0.5 ? choice.coarse : choice.fine);
     }
 
+    // A march from tiled reference point p0 along the unit reference direction lr, at most
+    // `maxStep` far and not past the cell's sides, top or floor: its transmittance, where it ends
+    // (cell coordinates) and the face it stopped on (TrilinearCell numbering; −1 when maxStep
+    // ended it inside). Straight in reference space: the mild-deformation assumption of the march.
+    struct CellMarch {
+        double transmittance = 1;
+        Vec3 end;
+        int exitFace = -1;
+        std::uint64_t blocks = 0;
+    };
+    CellMarch marchInCell(const TexelRuntime& texel, const SurfaceRuntime& surface, const Vec3& p0, const Vec3& lr,
+                          double maxStep, int level) const {
+        CellMarch m;
+        double step = maxStep;
+        const double extent[2] = {surface.repeatU, surface.repeatV};
+        for (int a = 0; a < 2; ++a) {
+            double s = std::numeric_limits<double>::infinity();
+            if (lr[a] > 0) s = std::max(0.0, (extent[a] - p0[a]) / lr[a]);
+            else if (lr[a] < 0) s = std::max(0.0, -p0[a] / lr[a]);
+            if (s < step) {
+                step = s;
+                m.exitFace = 2 + 2 * a + (lr[a] > 0 ? 1 : 0);
+            }
+        }
+        if (p0.z() + step * lr.z() > 1) {
+            step = std::max(0.0, (1 - p0.z()) / lr.z());
+            m.exitFace = 1;
+        }
+        if (p0.z() + step * lr.z() < 0) {
+            step = std::max(0.0, -p0.z() / lr.z());
+            m.exitFace = 0;  // the base surface, which blocks
+        }
+        const Vec3 p1 = p0 + step * lr;
+        const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level, kTransmittanceCutoff);
+        m.transmittance = seg.transmittance;
+        m.blocks = seg.blocks;
+        m.end = Vec3(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
+        return m;
+    }
+
 private:
+    static constexpr int kMaxChain = 256;
     LightTransmittanceCache makeLightCache() const {
         const int n = std::min(mOptions.approximations.shadowCacheResolution, 256);
         if (n <= 0) return {};
@@ -195,6 +255,7 @@ private:
     const std::vector<SurfaceRuntime>& mSurfaces;
     const std::vector<TexelRuntime>& mTexels;
     LightTransmittanceCache mLightCache = makeLightCache();
+    CellAdjacency mAdjacency = mLightCache.empty() ? CellAdjacency() : CellAdjacency(mTracer.prims());
 };
 
 }  // namespace vtex::render::detail

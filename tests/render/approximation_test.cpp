@@ -20,18 +20,20 @@ TEST(Approximations, ExactTurnsEveryOneOffAndTheKeyNamesEveryValue) {
     EXPECT_FALSE(ApproximationBudget{}.isExact());
     EXPECT_FALSE(exact.shareShadowRays);
     EXPECT_EQ(exact.shadowCacheResolution, 0);
+    EXPECT_FALSE(exact.chainLatticeNodes);
     EXPECT_EQ(exact.blendCutoff, 0.0);
     EXPECT_EQ(exact.reflectanceReuseWeight, 0.0);
     EXPECT_EQ(exact.exactFloorShadowAbove, 0.0);
     EXPECT_EQ(exact.shadowRefresh, 1.0);
     // Changing any one value changes the key (the pipeline's cache key is made from it).
-    std::vector<ApproximationBudget> variants(6);
+    std::vector<ApproximationBudget> variants(7);
     variants[0].shareShadowRays = false;
     variants[1].shadowCacheResolution = 16;
     variants[2].blendCutoff = 0.2;
     variants[3].reflectanceReuseWeight = 2e-3;
     variants[4].exactFloorShadowAbove = 0.1;
     variants[5].shadowRefresh = 0.5;
+    variants[6].chainLatticeNodes = false;
     for (const auto& v : variants) EXPECT_NE(v.key(), ApproximationBudget{}.key());
 }
 

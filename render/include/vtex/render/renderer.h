@@ -60,6 +60,11 @@ struct ApproximationBudget {
     /// (docs/render.md, "Shadows"); 0: every query casts its own ray (the exact path), as when
     /// the lattices of all cells would exceed 2^26 nodes.
     int shadowCacheResolution = 8;
+    /// The lattice's nodes chain from cell to cell: a node marches its own cell and takes the
+    /// neighbour's lattice, interpolated on the shared face, where the light leaves through a
+    /// side (docs/render.md, "Shadows"); false: every node casts a shadow ray walked through the
+    /// whole scene (the exact nodes this is tested against).
+    bool chainLatticeNodes = true;
     /// A level whose blend weight is below this is not marched, its weight going to the other
     /// level (docs/render.md, "Levels"); 0: both levels of every blend are marched (exact).
     double blendCutoff = 0.1;
