@@ -115,6 +115,12 @@ void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& 
 
 std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
                                                           double tau, int chords, std::uint64_t seed) {
+    return measureChordTransmittance(tree, visible, tau, chords, seed, {});
+}
+
+std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+                                                          double tau, int chords, std::uint64_t seed,
+                                                          const EnoughLevels& enough) {
     std::vector<ChordTransmittance> out(tree.levels.size());
     if (chords <= 0) return out;
     const std::size_t count = std::size_t(chords);
@@ -139,6 +145,10 @@ std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, co
         double sum = 0;  // in chord order: the same whatever the schedule
         for (double t : transmittance) sum += t;
         out[level] = {visibility, sum / double(count)};
+        if (enough && enough(level, out[level])) {
+            out.resize(level + 1);
+            break;
+        }
     }
     return out;
 }

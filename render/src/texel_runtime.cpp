@@ -13,23 +13,34 @@ namespace {
 
 // The range of levels at which the volume lets through what the source mesh does, within
 // `tolerance` (absolute transmittance, mean over random chords of the whole texel): from the
-// level of least error, coarser and finer levels as long as each stays within the tolerance.
-// Coarser than that, a voxel spreads clustered leaves over its whole volume and is too opaque;
-// finer, a voxel stands for a piece of one opaque surface that the exponential medium lets light
-// through (and shadows itself).
+// coarsest level finer, the first level within the tolerance and the finer ones as long as each
+// stays within it. Coarser than that, a voxel spreads clustered leaves over its whole volume and
+// is too opaque; finer, a voxel stands for a piece of one opaque surface that the exponential
+// medium lets light through (and shadows itself). The measurement stops at the first level past
+// the run, so that a render does not read a lazily opened texel's finest levels (the bulk of its
+// file) only to measure them. When no level is within the tolerance, the level of least error
+// alone.
 struct FaithfulLevels {
     int coarsest = 0, finest = 0;
 };
 FaithfulLevels faithfulLevels(const octree::Octree& tree, const octree::ChordVisibility& visible, double tau,
                               double tolerance) {
-    const auto chords = octree::measureChordTransmittance(tree, visible, tau);
+    int coarsest = -1;
+    const auto chords = octree::measureChordTransmittance(
+        tree, visible, tau, 4096, 1, [&](std::size_t level, const octree::ChordTransmittance& c) {
+            const bool within = std::abs(c.error()) <= tolerance;
+            if (within && coarsest < 0) coarsest = int(level);
+            return coarsest >= 0 && !within;
+        });
+    if (coarsest >= 0) {
+        int finest = coarsest;
+        while (std::size_t(finest + 1) < chords.size() && std::abs(chords[std::size_t(finest + 1)].error()) <= tolerance) ++finest;
+        return {coarsest, finest};
+    }
     std::size_t best = 0;
     for (std::size_t l = 1; l < chords.size(); ++l)
         if (std::abs(chords[l].error()) < std::abs(chords[best].error())) best = l;
-    std::size_t coarsest = best, finest = best;
-    while (coarsest > 0 && std::abs(chords[coarsest - 1].error()) <= tolerance) --coarsest;
-    while (finest + 1 < chords.size() && std::abs(chords[finest + 1].error()) <= tolerance) ++finest;
-    return {int(coarsest), int(finest)};
+    return {int(best), int(best)};
 }
 
 }  // namespace

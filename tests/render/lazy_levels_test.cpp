@@ -108,6 +108,23 @@ TEST(LazyLevels, AFarViewReadsOnlyItsCoarseLevelsAndDrawsTheImageOfTheTreeReadWh
     EXPECT_LT(lazy.stats.vtoBytesRead, fileSize / 100);  // the finest levels hold the bulk
 }
 
+// A texel with its source: the hybrid's faithful levels are measured from the coarsest level
+// finer and the measurement stops at the first level past them (texel_runtime.cpp), so the
+// far view still reads no level deeper than the mesh level's next (5 and 6 on this bush), not
+// the finest two that hold nearly all the file. Before, the measurement read every level.
+TEST(LazyLevels, ATexelWithItsSourceReadsOnlyTheLevelsItMeasuresAndMarches) {
+    Scene scene = bushField(Eigen::Vector3d(36.725582, -63.610577, 42.907051), true, 96, 72);
+    scene.texels[0].sourceData = bushFile().mesh;
+    const RenderResult lazy = renderQuiet(scene);
+    ASSERT_EQ(lazy.stats.meshLevels.size(), 1u);
+    const int meshLevel = int(lazy.stats.meshLevels[0]);
+    EXPECT_GE(meshLevel, 3);
+    const int deepest = deepestLevelRead(lazy.stats);
+    EXPECT_GE(deepest, 0);
+    EXPECT_LE(deepest, meshLevel + 1);
+    EXPECT_LT(lazy.stats.vtoBytesRead, fs::file_size(bushFile().path) / 10);
+}
+
 TEST(LazyLevels, ANearerViewReadsDeeperLevelsAndStillDrawsTheSameImage) {
     const Eigen::Vector3d near(1.784539, -3.090912, 2.560608);
     const RenderResult lazy = renderQuiet(bushField(near, true, 160, 120));

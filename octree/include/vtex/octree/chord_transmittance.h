@@ -41,6 +41,17 @@ struct ChordTransmittance {
 std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
                                                           double tau = 1, int chords = 4096, std::uint64_t seed = 1);
 
+/// Whether a level-by-level measurement has seen enough: called with each level's result in
+/// turn, coarsest first; true stops before the next level is read or walked.
+using EnoughLevels = std::function<bool(std::size_t level, const ChordTransmittance&)>;
+
+/// The same levels and chords, from the coarsest down to the first level after which `enough`
+/// says stop (the result holds the levels measured): finer levels are neither walked nor read
+/// from a lazily opened file, whose finest levels hold nearly all its bytes.
+std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+                                                          double tau, int chords, std::uint64_t seed,
+                                                          const EnoughLevels& enough);
+
 /// One level over multi-voxel beams (the scale at which a fit of the level would be judged,
 /// Vicini, Jakob & Kaplanyan 2021): a beam is a bundle of parallel chords on a stratified grid
 /// over a square cross-section one voxel of the level across, four voxels long (at most half
