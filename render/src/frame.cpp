@@ -36,28 +36,37 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
     std::vector<Prim> prims;
     for (std::size_t si = 0; si < scene.surfaces.size(); ++si) {
         const SurfaceDef& def = scene.surfaces[si];
-        if (def.texel && *def.texel >= scene.texels.size())
-            throw InputError(scene.file, "texel index out of range", "surface.texel");
-        SurfaceRuntime s;
-        s.material = def.material;
-        s.texel = def.texel ? int(*def.texel) : -1;
-        s.repeatU = def.repeat[0];
-        s.repeatV = def.repeat[1];
-        s.height = def.height;
-        geometry.surfaces.push_back(s);
+        // One runtime surface per placing (SurfaceDef::placing): the faces of each material or
+        // group named in `texels`, and the others.
+        const std::size_t first = geometry.surfaces.size();
+        for (std::size_t k = 0; k < def.placingCount(); ++k) {
+            const TexelPlacing placing = def.placing(k);
+            if (placing.texel && *placing.texel >= scene.texels.size())
+                throw InputError(scene.file, "texel index out of range", "surface.texel");
+            SurfaceRuntime s;
+            s.material = def.material;
+            s.texel = placing.texel ? int(*placing.texel) : -1;
+            s.repeatU = placing.repeat[0];
+            s.repeatV = placing.repeat[1];
+            s.height = placing.height;
+            s.under = placing.placement == Placement::Under;
+            geometry.surfaces.push_back(s);
+        }
         const auto mesh = loadSurfaceMesh(scene, si);
+        const std::vector<std::uint32_t> placings = facePlacings(scene, si, *mesh);
         for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
             Prim prim;
-            prim.surface = int(si);
+            prim.surface = int(first + placings[f]);
             prim.face = int(f);
+            const SurfaceRuntime& s = geometry.surfaces[std::size_t(prim.surface)];
             if (!baseFaceCorners(*mesh, f, prim.p, prim.n))
                 throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
             for (const Vec3& corner : prim.p)  // the shell's top is within `height` of its corners
-                if (!inRange(corner) || !(corner.cwiseAbs().maxCoeff() + std::abs(def.height) <= kMaxSceneCoordinate))
+                if (!inRange(corner) || !(corner.cwiseAbs().maxCoeff() + std::abs(s.height) <= kMaxSceneCoordinate))
                     throw InputError(def.mesh, "face " + std::to_string(f) + " has a corner (or its shell) beyond ±1e12, "
                                      "the renderers' exact range");
-            if (def.texel) {
-                prim.cell = TrilinearCell(prim.p, prim.n, def.height, def.placement == Placement::Under);
+            if (s.texel >= 0) {
+                prim.cell = TrilinearCell(prim.p, prim.n, s.height, s.under);
                 ++geometry.cells;
                 if (cellsAsFloors)
                     prim.p = prim.cell.faceCorners(0);
@@ -189,8 +198,9 @@ std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& option
     std::vector<bool> used(scene.texels.size(), false);
     for (const SurfaceDef& s : scene.surfaces) {
         if (!s.meshData) bytes += 32 * fileBytes(s.mesh);
-        if (s.texel && *s.texel < used.size()) used[*s.texel] = true;
     }
+    for (const std::size_t t : usedTexels(scene))
+        if (t < used.size()) used[t] = true;
     for (std::size_t t = 0; t < scene.texels.size(); ++t) {
         if (!used[t]) continue;
         if (!scene.texels[t].octree) bytes += 3 * fileBytes(scene.texels[t].volume);

@@ -27,16 +27,19 @@
 
 namespace vtex::render::detail {
 
+/// The faces of one placing of a scene surface (SurfaceDef::placing): a texel per face comes
+/// as one of these per material or group.
 struct SurfaceRuntime {
     Material material;
     int texel = -1;
     double repeatU = 1, repeatV = 1;
     double height = 0;
+    bool under = false;
 };
 
 /// The base faces of a scene: plain patches, and cells over the faces of textured surfaces.
 struct SceneGeometry {
-    std::vector<SurfaceRuntime> surfaces;
+    std::vector<SurfaceRuntime> surfaces;  ///< Prim::surface indexes these
     std::unique_ptr<Tracer> tracer;
     std::uint64_t faces = 0;
     std::uint64_t cells = 0;

@@ -202,19 +202,18 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     std::vector<const detail::SourceBvh*> bvhs(scene.texels.size(), nullptr);
     std::uint64_t sourceTriangles = 0;
     RenderStats vtoBytes;  // only its .vto counts
-    for (const SurfaceDef& s : scene.surfaces) {
-        if (!s.texel || sources[*s.texel].bvh) continue;
-        const TexelDef& def = scene.texels[*s.texel];
+    for (const std::size_t t : usedTexels(scene)) {
+        const TexelDef& def = scene.texels.at(t);
         if (!def.sourceData && def.source.empty())
             throw InputError(scene.file, "texel '" + def.name + "' has no source mesh (vtex reference draws it)", "texel.source");
-        SourceRuntime& runtime = sources[*s.texel];
-        runtime.mesh = loadTexelSource(scene, *s.texel);
+        SourceRuntime& runtime = sources[t];
+        runtime.mesh = loadTexelSource(scene, t);
         // Where the sampler put the mesh in the unit cube is recorded in the volume.
-        const auto volume = loadTexelVolume(scene, *s.texel);
+        const auto volume = loadTexelVolume(scene, t);
         runtime.bvh = std::make_unique<detail::SourceBvh>(*runtime.mesh, volume->info.source);
         detail::countVtoBytes(def, *volume, vtoBytes);
         runtime.material = def.material;
-        bvhs[*s.texel] = runtime.bvh.get();
+        bvhs[t] = runtime.bvh.get();
         sourceTriangles += runtime.mesh->triangles.size();
     }
     std::unique_ptr<detail::DeformedMesh> deformed;

@@ -275,8 +275,7 @@ std::uint64_t latticeMemoryCap(const Scene& scene, const RenderOptions& options)
     if (options.approximations.shadowCacheResolution <= 0) return 0;
     const bool directional = std::any_of(scene.lights.begin(), scene.lights.end(),
                                          [](const Light& l) { return l.type == LightType::Directional; });
-    const bool textured = std::any_of(scene.surfaces.begin(), scene.surfaces.end(),
-                                      [](const SurfaceDef& s) { return s.texel.has_value(); });
+    const bool textured = !usedTexels(scene).empty();
     return directional && textured ? std::uint64_t(detail::LightTransmittanceCache::kMaxNodes) * sizeof(float) : 0;
 }
 
