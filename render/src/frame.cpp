@@ -28,6 +28,24 @@ void checkSceneRange(const Scene& scene) {
             throw InputError(scene.file, "a coordinate" + limit, "light[" + std::to_string(i) + "].position");
 }
 
+// A shift, or a sub-rectangle beyond the unit square, shows a texel's pattern cut inside each
+// face unless the texel is cyclic (docs/render.md, "Per-face perturbation"): refused, naming the
+// key.
+void checkTiling(const Scene& scene, std::size_t si, std::size_t k) {
+    const SurfaceDef& def = scene.surfaces[si];
+    const TexelPlacing placing = def.placing(k);
+    if (!placing.texel) return;
+    const auto& r = placing.subrect;
+    const bool outside = r && ((*r)[0] < 0 || (*r)[1] < 0 || (*r)[2] > 1 || (*r)[3] > 1);
+    if ((!def.perturb.shift && !outside) || texelIsCyclic(scene, *placing.texel)) return;
+    const std::string surface = "surface[" + std::to_string(si) + "]";
+    const std::string texel = "texel '" + scene.texels[*placing.texel].name + "' is not cyclic";
+    if (def.perturb.shift)
+        throw InputError(scene.file, texel + " (a shift would cut its pattern inside each face)", surface + ".perturb.shift");
+    throw InputError(scene.file, texel + ": the sub-rectangle must lie within [0, 1]²",
+                     (k == 0 ? surface : surface + ".texels." + def.texels[k - 1].name) + ".subrect");
+}
+
 }  // namespace
 
 SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
@@ -43,11 +61,11 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
             const TexelPlacing placing = def.placing(k);
             if (placing.texel && *placing.texel >= scene.texels.size())
                 throw InputError(scene.file, "texel index out of range", "surface.texel");
+            checkTiling(scene, si, k);
             SurfaceRuntime s;
             s.material = def.material;
             s.texel = placing.texel ? int(*placing.texel) : -1;
-            s.repeatU = placing.repeat[0];
-            s.repeatV = placing.repeat[1];
+            s.placing = placing;
             s.height = placing.height;
             s.under = placing.placement == Placement::Under;
             geometry.surfaces.push_back(s);
@@ -67,6 +85,7 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
                                      "the renderers' exact range");
             if (s.texel >= 0) {
                 prim.cell = TrilinearCell(prim.p, prim.n, s.height, s.under);
+                prim.map = makeCellMap(s.placing, drawFaceTransform(def.perturb, f));
                 ++geometry.cells;
                 if (cellsAsFloors)
                     prim.p = prim.cell.faceCorners(0);
@@ -81,26 +100,18 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
     return geometry;
 }
 
-Mat3 tiledJacobian(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
-    Mat3 j = cell.jacobian(r);
-    j.col(0) /= s.repeatU;
-    j.col(1) /= s.repeatV;
-    return j;
-}
+Mat3 tiledJacobian(const Prim& prim, const Vec3& r) { return prim.cell.jacobian(r) * prim.map.linearInverse(); }
 
-double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
-    return localScale(cell, r, s.repeatU, s.repeatV);
-}
+double localScale(const Prim& prim, const Vec3& r) { return localScale(prim.cell, r, prim.map); }
 
-SourcePoint sourcePoint(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const Vec3& referenceNormal,
-                        const Vec3& d) {
+SourcePoint sourcePoint(const Prim& prim, const Vec3& rt, const Vec3& referenceNormal, const Vec3& d) {
     SourcePoint p;
-    p.cell = Vec3(rt.x() / surface.repeatU, rt.y() / surface.repeatV, rt.z());
+    p.cell = prim.map.toCell(rt);
     p.world = prim.cell.map(p.cell);
-    const Vec3 n = tiledJacobian(prim.cell, p.cell, surface).inverse().transpose() * referenceNormal;
+    const Vec3 n = tiledJacobian(prim, p.cell).inverse().transpose() * referenceNormal;
     const double length = n.norm();
     p.normal = length > 0 && std::isfinite(length) ? Vec3(n / length) : Vec3(-d);
-    p.scale = localScale(prim.cell, p.cell, surface);
+    p.scale = localScale(prim, p.cell);
     return p;
 }
 

@@ -39,6 +39,9 @@ std::vector<TexelLevelNeed> finestUsefulLevels(const Scene& scene, const RenderO
             if (!detail::baseFaceCorners(*mesh, f, p, n))
                 throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
             const TrilinearCell cell(p, n, surface.height, surface.placement == Placement::Under);
+            // The face's perturbation turns and shifts its map, which changes no scale: the
+            // unperturbed map gives the same local scales.
+            const CellMap map = makeCellMap(surface, FaceTransform{});
             Vec3 lo = cell.corners()[0], hi = cell.corners()[0];
             for (const Vec3& c : cell.corners()) {
                 lo = lo.cwiseMin(c);
@@ -48,7 +51,7 @@ std::vector<TexelLevelNeed> finestUsefulLevels(const Scene& scene, const RenderO
             double scale = 0;
             for (int i = 0; i < 27; ++i)
                 scale = std::max(scale, detail::localScale(cell, Vec3(0.5 * (i % 3), 0.5 * (i / 3 % 3), 0.5 * (i / 9)),
-                                                           surface.repeat[0], surface.repeat[1]));
+                                                           map));
             nearest[texel] = std::min(nearest[texel], distance);
             const double width = spread * distance / scale;
             const double level = width > 0 ? -std::log2(width) : std::numeric_limits<double>::infinity();

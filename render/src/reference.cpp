@@ -84,7 +84,7 @@ private:
                 return opaque(hit->t, shadeFloor(prim, surface, span.rIn, d, counters));
             if (const auto rIn = detail::entryCoords(prim, *hit, o, d, -1, Vec3::Zero())) {
                 ++counters.segments;
-                const Vec3 p0 = tile(*rIn, surface), p1 = tile(span.rOut, surface);
+                const Vec3 p0 = tile(*rIn, prim), p1 = tile(span.rOut, prim);
                 const SourceRuntime& source = mSources[std::size_t(surface.texel)];
                 if (const auto h = source.bvh->intersect(p0, p1, 0)) {
                     const double t = hit->t + h->s * (span.tOut - hit->t);
@@ -121,8 +121,8 @@ private:
         ++counters.shadow;
         return detail::walkShadowRay(
             mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, 0,
-            [&](const Prim&, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint, double) {
-                return mSources[std::size_t(surface.texel)].bvh->occludedLeaving(tile(rIn, surface), tile(rOut, surface),
+            [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint, double) {
+                return mSources[std::size_t(surface.texel)].bvh->occludedLeaving(tile(rIn, prim), tile(rOut, prim),
                                                                                  startsAtHint)
                            ? 0.0
                            : 1.0;
@@ -165,7 +165,7 @@ private:
     // through the inverse transpose of the tiled map's Jacobian there.
     Color shadeSource(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const detail::SourceHit& hit,
                       const Vec3& d, Counters& counters) const {
-        const detail::SourcePoint p = detail::sourcePoint(prim, surface, rt, hit.normal, d);
+        const detail::SourcePoint p = detail::sourcePoint(prim, rt, hit.normal, d);
         const int primIndex = int(&prim - mTracer.prims().data());
         const SourceRuntime& source = mSources[std::size_t(surface.texel)];
         return detail::shadePhong(mLights, p.world, p.normal, p.normal, -d, source.material, hit.albedo, p.scale,

@@ -78,18 +78,19 @@ public:
         if (span) {
             lr = span->light;
         } else {
-            lr = tiledJacobian(prim.cell, r, surface).inverse() * l;
+            lr = tiledJacobian(prim, r).inverse() * l;
             const double len = lr.norm();
             if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
             lr /= len;
         }
-        const Vec3 p0 = tile(r, surface);
+        const Vec3 p0 = tile(r, prim);
         double step = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
         // Not past the cell's sides: the lattice looked up where the march ends is this cell's.
-        const double extent[2] = {surface.repeatU, surface.repeatV};
+        // In cell coordinates, where the sides are u, v = 0 and 1 whatever the face's CellMap.
+        const Vec3 lc = prim.map.linearInverse() * lr;
         for (int a = 0; a < 2; ++a) {
-            if (lr[a] > 0) step = std::min(step, std::max(0.0, (extent[a] - p0[a]) / lr[a]));
-            else if (lr[a] < 0) step = std::min(step, std::max(0.0, -p0[a] / lr[a]));
+            if (lc[a] > 0) step = std::min(step, std::max(0.0, (1 - r[a]) / lc[a]));
+            else if (lc[a] < 0) step = std::min(step, std::max(0.0, -r[a] / lc[a]));
         }
         bool floor = false;
         if (p0.z() + step * lr.z() > 1) step = std::max(0.0, (1 - p0.z()) / lr.z());
@@ -98,11 +99,11 @@ public:
             floor = true;  // the step reaches the base surface, which blocks
         }
         const Vec3 p1 = p0 + step * lr;
-        const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim.cell, r, surface)));
+        const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim, r)));
         const SegmentTransmittance near = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level, kTransmittanceCutoff);
         counters.voxels += near.blocks;
         if (floor || near.transmittance <= kTransmittanceCutoff) return 0;
-        const Vec3 rEnd(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
+        const Vec3 rEnd = prim.map.toCell(p1);
         return near.transmittance * cachedShadow(slot, primIndex, rEnd, l);
     }
 
@@ -112,14 +113,13 @@ public:
     // which tile came first).
     double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l) const {
         const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
-        const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
         const double spacing = 1.0 / double(mLightCache.grid(primIndex).nw);
         return mLightCache.lookup(slot, primIndex, r, [&](const Vec3& node) {
             // Nodes on the cell's faces move in by a hair, so that the ray starts inside.
             const Vec3 rn = node.cwiseMax(Vec3::Constant(1e-4)).cwiseMin(Vec3::Constant(1 - 1e-4));
             Counters uncounted;
             return tracedShadow(prim.cell.map(rn), l, std::numeric_limits<double>::infinity(),
-                                localScale(prim.cell, rn, surface) * spacing, primIndex, rn, uncounted);
+                                localScale(prim, rn) * spacing, primIndex, rn, uncounted);
         });
     }
 
@@ -132,8 +132,8 @@ public:
             [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint,
                 double transmittance) {
                 const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
-                const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
-                const LevelChoice choice = chooseLevel(width / localScale(prim.cell, 0.5 * (rIn + rOut), surface),
+                const Vec3 p0 = tile(rIn, prim), p1 = tile(rOut, prim);
+                const LevelChoice choice = chooseLevel(width / localScale(prim, 0.5 * (rIn + rOut)),
                                                        mOptions.lodBias, texel.volume->maxLevel());
                 // The hybrid's rule for shadows too: the source mesh where the footprint is finer
                 // than the volume is faithful, blended over the next level.
@@ -180,9 +180,9 @@ private:
             for (std::size_t i = 0; i < grids.size(); ++i) {
                 const Prim& prim = mTracer.prims()[i];
                 if (!prim.textured) continue;
-                const SurfaceRuntime& s = mSurfaces[std::size_t(prim.surface)];
-                const auto across = [&](double repeat) { return n * int(std::clamp(std::ceil(repeat), 1.0, 4.0)); };
-                grids[i] = {across(s.repeatU), across(s.repeatV), n};
+                // Tiles of the texel along the cell's u and v: the lengths of the CellMap's columns.
+                const auto across = [&](double tiles) { return n * int(std::clamp(std::ceil(tiles), 1.0, 4.0)); };
+                grids[i] = {across(prim.map.a.col(0).norm()), across(prim.map.a.col(1).norm()), n};
                 total += double(grids[i].nodes()) * double(directions.size());
             }
         if (total > LightTransmittanceCache::kMaxNodes) return {};

@@ -20,6 +20,7 @@
 #include <vtex/render/scene.h>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
