@@ -139,6 +139,31 @@ TEST(Ingest, GltfIsTurnedFromYUpToZUp) {
     EXPECT_FLOAT_EQ(obj.boundsMax.x(), 0.0f);
 }
 
+// A real glTF of known up axis (issue 16): Khronos' ClearCoatTest, in Debian's
+// assimp-testmodels, is a board of labelled spheres standing upright, facing the glTF viewer:
+// tall along glTF's +Y, thin along +Z. Ingested, it stands along vtex's +Z, its face toward −y;
+// read as it is (--up z), it would lie on its back.
+TEST(Ingest, RealGltfModelStandsAlongZ) {
+    const fs::path model = "/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf";
+    if (!fs::exists(model)) GTEST_SKIP() << "assimp-testmodels not installed";
+    IngestReport turned, asIs;
+    loadMesh(model, {}, &turned);
+    IngestOptions noTurn;
+    noTurn.up = 'z';
+    loadMesh(model, noTurn, &asIs);
+    const Eigen::Vector3f standing = turned.boundsMax - turned.boundsMin, lying = asIs.boundsMax - asIs.boundsMin;
+    std::cout << "ClearCoatTest extent: " << standing.transpose() << " (turned), " << lying.transpose() << " (as is)\n";
+    EXPECT_EQ(turned.up, 'y');
+    // The board is thin across its face and tall: after the turn the thin axis is y, and its
+    // height is along z.
+    EXPECT_LT(standing.y(), 0.5f * standing.z());
+    EXPECT_LT(standing.y(), 0.5f * standing.x());
+    EXPECT_GT(lying.y(), 2.0f * lying.z());  // as is, it lies on its back
+    // The turn is (x, y, z) → (x, −z, y): the height is the file's y extent.
+    EXPECT_NEAR(standing.z(), lying.y(), 1e-4f * lying.y());
+    EXPECT_NEAR(turned.boundsMin.y(), -asIs.boundsMax.z(), 1e-4f * lying.maxCoeff());
+}
+
 // --fit cell: the largest side of the bounding box becomes 1, centred in x and y, base at z = 0,
 // the same factor on every axis; recorded in the report.
 TEST(Ingest, FitCellScalesUniformlyIntoTheUnitCube) {
