@@ -37,13 +37,13 @@ void checkTiling(const Scene& scene, std::size_t si, std::size_t k) {
     if (!placing.texel) return;
     const auto& r = placing.subrect;
     const bool outside = r && ((*r)[0] < 0 || (*r)[1] < 0 || (*r)[2] > 1 || (*r)[3] > 1);
-    if ((!def.perturb.shift && !outside) || texelIsCyclic(scene, *placing.texel)) return;
+    if ((!placing.perturb.shift && !outside) || texelIsCyclic(scene, *placing.texel)) return;
     const std::string surface = "surface[" + std::to_string(si) + "]";
+    const std::string key = k == 0 ? surface : surface + ".texels." + def.texels[k - 1].name;
     const std::string texel = "texel '" + scene.texels[*placing.texel].name + "' is not cyclic";
-    if (def.perturb.shift)
-        throw InputError(scene.file, texel + " (a shift would cut its pattern inside each face)", surface + ".perturb.shift");
-    throw InputError(scene.file, texel + ": the sub-rectangle must lie within [0, 1]²",
-                     (k == 0 ? surface : surface + ".texels." + def.texels[k - 1].name) + ".subrect");
+    if (placing.perturb.shift)
+        throw InputError(scene.file, texel + " (a shift would cut its pattern inside each face)", key + ".perturb.shift");
+    throw InputError(scene.file, texel + ": the sub-rectangle must lie within [0, 1]²", key + ".subrect");
 }
 
 }  // namespace
@@ -85,7 +85,7 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
                                      "the renderers' exact range");
             if (s.texel >= 0) {
                 prim.cell = TrilinearCell(prim.p, prim.n, s.height, s.under);
-                prim.map = makeCellMap(s.placing, drawFaceTransform(def.perturb, f));
+                prim.map = makeCellMap(s.placing, drawFaceTransform(s.placing.perturb, f));
                 ++geometry.cells;
                 if (cellsAsFloors)
                     prim.p = prim.cell.faceCorners(0);

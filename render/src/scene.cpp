@@ -62,7 +62,7 @@ public:
 
     // The height, placement and repeat or sub-rectangle of `t` (a surface or one of its `texels`
     // entries), each defaulting to `base`'s.
-    TexelPlacing placing(const toml::table& t, const std::string& p, TexelPlacing base) const {
+    TexelPlacing placing(const toml::table& t, const std::string& p, TexelPlacing base) {
         base.height = number(t, p, "height", base.height, 0, 1e30, true);
         const std::string placement = choice(t, p, "placement", std::string(base.placement == Placement::Under ? "under" : "on"),
                                              {"on", "under"});
@@ -83,6 +83,7 @@ public:
             base.subrect = std::array<double, 4>{r[0], r[1], r[2], r[3]};
             base.repeat = {1, 1};
         }
+        if (t.get("perturb")) base.perturb = perturbation(t, p);
         return base;
     }
 
@@ -105,7 +106,7 @@ public:
             if (const auto* texel = node.as_string()) {
                 entry.placing.texel = texelIndex(scene, key, texel->get());
             } else if (const auto* table = node.as_table()) {
-                checkKeys(*table, key, {"texel", "height", "placement", "repeat", "subrect"});
+                checkKeys(*table, key, {"texel", "height", "placement", "repeat", "subrect", "perturb"});
                 entry.placing = placing(*table, key, own);
                 entry.placing.texel = texelIndex(scene, join(key, "texel"), string(*table, key, "texel", std::nullopt));
             } else {
@@ -139,8 +140,8 @@ public:
         s.placement = own.placement;
         s.repeat = own.repeat;
         s.subrect = own.subrect;
+        s.perturb = own.perturb;
         s.texels = namedPlacings(scene, t, p, own);
-        s.perturb = perturbation(t, p);
         s.material = material(t, p, Material{});
         if (!s.texel && s.texels.empty() &&
             (t.get("height") || t.get("placement") || t.get("repeat") || t.get("subrect") || t.get("perturb")))

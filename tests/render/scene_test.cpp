@@ -174,6 +174,17 @@ TEST(Scene, PerFaceTexelsSubrectAndPerturbation) {
     EXPECT_FALSE(d.perturb.mirror);
     EXPECT_TRUE(d.perturb.shift);
     EXPECT_EQ(d.placingCount(), 3u);
+    EXPECT_EQ(d.texels[0].placing.perturb.seed, 7u);  // entries take the surface's perturbation
+    EXPECT_TRUE(d.texels[0].placing.perturb.shift);
+    // An entry's own perturbation replaces it (a cyclic texel's faces shifted, another's not).
+    const Scene own = parseScene(replace(kGood, "repeat    = [2, 3]",
+                                         "perturb = { seed = 3, shift = true }\n"
+                                         "texels = { bush = { texel = \"grass\", perturb = { seed = 5, rotate = true } } }"),
+                                 "/scenes/s.toml");
+    EXPECT_EQ(own.surfaces[0].texels[0].placing.perturb.seed, 5u);
+    EXPECT_TRUE(own.surfaces[0].texels[0].placing.perturb.rotate);
+    EXPECT_FALSE(own.surfaces[0].texels[0].placing.perturb.shift);
+    EXPECT_TRUE(own.surfaces[0].placing(0).perturb.shift);
 
     const auto withKeys = [&](const std::string& k) { return errorOf(replace(kGood, "repeat    = [2, 3]", k)); };
     EXPECT_EQ(withKeys("texels = { bush = \"hedge\" }"), "/scenes/s.toml: surface[0].texels.bush: no [[texel]] is named 'hedge'");

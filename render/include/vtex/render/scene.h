@@ -71,6 +71,16 @@ struct TexelDef {
 
 enum class Placement { On, Under };
 
+/// The paper's "agrandir, déplacer ou faire tourner le volume de référence pour chaque texel"
+/// (§3), to break the repetition: per face, drawn from `seed` and the face, a quarter turn of
+/// the reference volume about its vertical axis, a mirror in x or y, and a shift in x and y
+/// (cyclic texels only). See cell_map.h.
+struct Perturbation {
+    std::uint64_t seed = 0;
+    bool rotate = false, mirror = false, shift = false;
+    bool any() const { return rotate || mirror || shift; }
+};
+
 /// How a texel covers a face (DESIGN.md, "Base mesh and mapping"; paper §3: "pour chaque face
 /// bilinéaire, un pointeur de texel indique quel motif utiliser ; on indique également si le
 /// texel doit être posé sur ou sous la face"): which texel, the shell height, on or under the
@@ -83,22 +93,13 @@ struct TexelPlacing {
     /// The rectangle [x0, y0, x1, y1] of (tiled) reference space a face shows, instead of
     /// [0, 0, repeat]; beyond the unit square only for a cyclic texel.
     std::optional<std::array<double, 4>> subrect;
+    Perturbation perturb;  ///< off by default
 };
 
 /// A surface's faces of one material or group (`[[surface]] texels = { name = … }`).
 struct NamedPlacing {
     std::string name;
     TexelPlacing placing;
-};
-
-/// The paper's "agrandir, déplacer ou faire tourner le volume de référence pour chaque texel"
-/// (§3), to break the repetition: per face, drawn from `seed` and the face, a quarter turn of
-/// the reference volume about its vertical axis, a mirror in x or y, and a shift in x and y
-/// (cyclic texels only). See cell_map.h.
-struct Perturbation {
-    std::uint64_t seed = 0;
-    bool rotate = false, mirror = false, shift = false;
-    bool any() const { return rotate || mirror || shift; }
 };
 
 struct SurfaceDef {
@@ -112,14 +113,14 @@ struct SurfaceDef {
     std::optional<std::array<double, 4>> subrect;
     /// Per face material or group name (ingest::QuadMesh::faceNames; a material's name first).
     std::vector<NamedPlacing> texels;
-    Perturbation perturb;
+    Perturbation perturb;  ///< the faces `texels` does not name; the entries' default
     Material material;
     /// The mesh, when the caller provides it in memory (tests); otherwise read from `mesh`.
     std::shared_ptr<const ingest::QuadMesh> meshData;
 
     /// Placing k: 0 the surface's own (texel, height, …), k ≥ 1 that of texels[k − 1].
     TexelPlacing placing(std::size_t k) const {
-        return k == 0 ? TexelPlacing{texel, height, placement, repeat, subrect} : texels.at(k - 1).placing;
+        return k == 0 ? TexelPlacing{texel, height, placement, repeat, subrect, perturb} : texels.at(k - 1).placing;
     }
     std::size_t placingCount() const { return texels.size() + 1; }
 };
