@@ -20,6 +20,9 @@ namespace vtex::ingest {
 namespace {
 
 using Polygon = std::vector<std::uint32_t>;
+// A polygon's material and group (QuadMesh::faceNames): triangles of different ones are never
+// one quad.
+using Label = std::array<std::uint32_t, 2>;
 
 // Two triangles that were one quad an exporter triangulated along its diagonal become that quad
 // again, if their normals are within kMaxFold of each other and their union is convex
@@ -62,11 +65,13 @@ struct TrianglePairs {
     // The pairs an exporter writes one after the other as a fan, (v0, v1, v2) then (v0, v2, v3):
     // the quad (v0, v1, v2, v3), in its own orientation, so that texels keep their direction
     // from cell to cell.
-    void mergeFans(std::vector<Polygon>& polygons) const {
+    void mergeFans(std::vector<Polygon>& polygons, std::vector<Label>& labels) const {
         std::vector<Polygon> out;
+        std::vector<Label> outLabels;
         for (std::size_t i = 0; i < polygons.size(); ++i) {
             const Polygon& t = polygons[i];
-            if (i + 1 < polygons.size() && t.size() == 3 && polygons[i + 1].size() == 3) {
+            outLabels.push_back(labels[i]);
+            if (i + 1 < polygons.size() && t.size() == 3 && polygons[i + 1].size() == 3 && labels[i] == labels[i + 1]) {
                 const Polygon& u = polygons[i + 1];
                 // The shared diagonal v0–v2; as (a, d, b, c): a = v2, b = v0.
                 if (u[0] == t[0] && u[1] == t[2] && u[2] != t[1] && mergeable({t[2], u[2], t[0], t[1]})) {
@@ -78,23 +83,30 @@ struct TrianglePairs {
             out.push_back(t);
         }
         polygons = std::move(out);
+        labels = std::move(outLabels);
     }
 
     // Any two triangles sharing an edge that is the longest of both, wound consistently: the quad
-    // starting at its lowest vertex index. A triangle pairs only with a later one (an earlier one
-    // had its turn).
-    void mergeLongestEdges(std::vector<Polygon>& polygons) const {
+    // starting at the first corner of the earlier triangle. A quad (v0, v1, v2, v3) cut along its
+    // other diagonal is written (v0, v1, v3), (v1, v2, v3) (Blender, OpenMesh), so that corner is
+    // the quad's own first one, and the texel keeps its direction from cell to cell (a start at
+    // the lowest vertex index turned cells, as the reader numbers vertices by first use:
+    // PerFaceTexels.ATriangulatedGridRendersAsItsQuads). A triangle pairs only with a later one
+    // (an earlier one had its turn).
+    void mergeLongestEdges(std::vector<Polygon>& polygons, std::vector<Label>& labels) const {
         std::vector<std::pair<std::uint32_t, std::uint32_t>> edge(polygons.size());
         std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> byEdge;
         for (std::size_t i = 0; i < polygons.size(); ++i)
             if (polygons[i].size() == 3) byEdge.emplace(edge[i] = longestEdge(polygons[i]), i);
         std::vector<char> merged(polygons.size(), 0);
         std::vector<Polygon> out;
+        std::vector<Label> outLabels;
         for (std::size_t i = 0; i < polygons.size(); ++i) {
             if (merged[i]) continue;
             const Polygon& t = polygons[i];
+            outLabels.push_back(labels[i]);
             const auto partner = t.size() == 3 ? byEdge.find({edge[i].second, edge[i].first}) : byEdge.end();
-            if (partner != byEdge.end() && partner->second > i) {
+            if (partner != byEdge.end() && partner->second > i && labels[partner->second] == labels[i]) {
                 const auto [a, b] = edge[i];
                 // The corner off the edge (a degenerate triangle has none: a, which mergeable refuses).
                 const auto apex = [a = a, b = b](const Polygon& p) {
@@ -103,7 +115,7 @@ struct TrianglePairs {
                 };
                 Polygon quad{a, apex(polygons[partner->second]), b, apex(t)};  // t = a→b→c, its partner b→a→d
                 if (mergeable(quad)) {
-                    std::rotate(quad.begin(), std::min_element(quad.begin(), quad.end()), quad.end());
+                    std::rotate(quad.begin(), std::find(quad.begin(), quad.end(), t[0]), quad.end());
                     out.push_back(std::move(quad));
                     merged[partner->second] = 1;
                     continue;
@@ -112,13 +124,35 @@ struct TrianglePairs {
             out.push_back(t);
         }
         polygons = std::move(out);
+        labels = std::move(outLabels);
     }
 };
 
-void mergeTrianglePairs(std::vector<Polygon>& polygons, const std::vector<Eigen::Vector3f>& positions) {
+void mergeTrianglePairs(std::vector<Polygon>& polygons, std::vector<Label>& labels,
+                        const std::vector<Eigen::Vector3f>& positions) {
     const TrianglePairs pairs{positions};
-    pairs.mergeFans(polygons);
-    pairs.mergeLongestEdges(polygons);
+    pairs.mergeFans(polygons, labels);
+    pairs.mergeLongestEdges(polygons, labels);
+}
+
+// The material and group names of the raw mesh's triangles as QuadMesh::names indices, one label
+// per triangle; `names` stays empty when the file names nothing.
+std::vector<Label> triangleLabels(const detail::RawMesh& raw, std::vector<std::string>& names) {
+    std::map<std::string, std::uint32_t> index;
+    const auto nameIndex = [&](const std::string& name) {
+        if (name.empty()) return QuadMesh::kNoName;
+        const auto [it, inserted] = index.try_emplace(name, std::uint32_t(names.size()));
+        if (inserted) names.push_back(name);
+        return it->second;
+    };
+    std::vector<Label> labels(raw.triangles.size(), Label{QuadMesh::kNoName, QuadMesh::kNoName});
+    for (std::size_t t = 0; t < raw.triangles.size(); ++t) {
+        if (t < raw.triangleMaterials.size() && raw.triangleMaterials[t] < raw.materials.size())
+            labels[t][0] = nameIndex(raw.materials[raw.triangleMaterials[t]].name);
+        if (t < raw.triangleGroups.size() && raw.triangleGroups[t] < raw.groups.size())
+            labels[t][1] = nameIndex(raw.groups[raw.triangleGroups[t]]);
+    }
+    return labels;
 }
 
 }  // namespace
@@ -147,21 +181,27 @@ QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& op
 
     // Polygons back from their fans.
     if (raw.polygonTriangles.empty()) raw.polygonTriangles.assign(raw.triangles.size(), 1);
+    QuadMesh mesh;
+    const std::vector<Label> triangleLabel = triangleLabels(raw, mesh.names);
     std::vector<Polygon> polygons;
+    std::vector<Label> labels;
     std::size_t t = 0;
     for (std::uint32_t count : raw.polygonTriangles) {
         if (t + count > raw.triangles.size()) throw InputError(file, "internal: polygon table mismatch");
         Polygon polygon{raw.triangles[t][0], raw.triangles[t][1], raw.triangles[t][2]};
         for (std::uint32_t k = 1; k < count; ++k) polygon.push_back(raw.triangles[t + k][2]);
+        labels.push_back(triangleLabel[t]);
         t += count;
         polygons.push_back(std::move(polygon));
     }
-    mergeTrianglePairs(polygons, raw.positions);
-    QuadMesh mesh;
-    for (const Polygon& polygon : polygons) {
+    mergeTrianglePairs(polygons, labels, raw.positions);
+    for (std::size_t p = 0; p < polygons.size(); ++p) {
+        const Polygon& polygon = polygons[p];
+        const std::size_t first = mesh.quads.size();
         std::size_t i = 1;
         for (; i + 2 < polygon.size(); i += 2) mesh.quads.push_back({polygon[0], polygon[i], polygon[i + 1], polygon[i + 2]});
         if (i + 1 < polygon.size()) mesh.quads.push_back({polygon[0], polygon[i], polygon[i + 1], polygon[i + 1]});
+        if (!mesh.names.empty()) mesh.faceNames.insert(mesh.faceNames.end(), mesh.quads.size() - first, labels[p]);
     }
     if (mesh.quads.empty()) throw InputError(file, "no faces");
 

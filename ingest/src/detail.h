@@ -20,6 +20,8 @@
 
 namespace vtex::ingest::detail {
 
+inline constexpr std::uint32_t kNoGroup = 0xffffffffu;
+
 /// What a reader hands to the repair pass: a triangle soup in world units with optional
 /// per-vertex attributes. Indices are already checked against positions.size() (a reader
 /// refuses or, with dropInvalidFaces, drops and counts a face that is not).
@@ -30,6 +32,10 @@ struct RawMesh {
     std::vector<Eigen::Vector2f> uvs;  ///< empty, or one per position
     std::vector<std::array<std::uint32_t, 3>> triangles;
     std::vector<std::uint32_t> triangleMaterials;  ///< empty, or one per triangle
+    /// Empty, or one per triangle: index into `groups`, the file's face groups (OBJ `g`, glTF
+    /// mesh names), which base meshes keep per face (QuadMesh::faceGroups).
+    std::vector<std::uint32_t> triangleGroups;  ///< kNoGroup: in none
+    std::vector<std::string> groups;
     /// Empty (every triangle is a face of its own), or per source polygon the number of
     /// consecutive triangles its fan from the first corner produced (base meshes need quads).
     std::vector<std::uint32_t> polygonTriangles;

@@ -284,6 +284,7 @@ private:
         const auto& source = mModel.materials[std::size_t(gltfMaterial)];
         const std::string materialWhere = "materials[" + std::to_string(gltfMaterial) + "]";
         Material material;
+        material.name = source.name;
         const auto& factor = source.pbrMetallicRoughness.baseColorFactor;
         if (!factor.empty()) {
             if (factor.size() != 4) throw InputError(mFile, "baseColorFactor must hold 4 numbers", materialWhere);
@@ -345,6 +346,13 @@ private:
         }
         const Eigen::Matrix3d normalMatrix = linear.inverse().transpose();
         const bool mirrored = det < 0;
+        // The mesh's name is its faces' group (a base mesh's faces take texels by it).
+        std::uint32_t group = kNoGroup;
+        if (!mesh.name.empty()) {
+            const auto [it, inserted] = mGroups.try_emplace(meshIndex, std::uint32_t(mOut.groups.size()));
+            if (inserted) mOut.groups.push_back(mesh.name);
+            group = it->second;
+        }
 
         for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
             const auto& primitive = mesh.primitives[p];
@@ -455,6 +463,7 @@ private:
                 mOut.triangles.push_back({std::uint32_t(base + t[0]), std::uint32_t(base + t[1]),
                                           std::uint32_t(base + t[2])});
                 mOut.triangleMaterials.push_back(std::uint32_t(material));
+                mOut.triangleGroups.push_back(group);
             }
         }
     }
@@ -472,6 +481,7 @@ private:
     RawMesh& mOut;
     int mDefaultMaterial = -1;
     std::map<int, int> mMaterials;         // glTF material → mOut.materials
+    std::map<int, std::uint32_t> mGroups;  // glTF mesh → mOut.groups
     std::map<int, int> mMaterialTexCoord;  // mOut material → TEXCOORD set of its texture
     std::map<int, int> mTextures;          // glTF texture → mOut.textures (or -1)
 };

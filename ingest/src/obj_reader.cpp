@@ -86,7 +86,8 @@ public:
             else if (keyword == "l" || keyword == "p") ++mSkippedPrimitives;
             else if (keyword == "usemtl") useMaterial(trim(args));
             else if (keyword == "mtllib") loadMaterialLibraries(trim(args));
-            // o, g, s, vp, curves, surfaces...: not geometry vtex uses.
+            else if (keyword == "g") useGroup(trim(args));
+            // o, s, vp, curves, surfaces...: not geometry vtex uses.
         }
         if (mSkippedPrimitives)
             mOut.warnings.push_back(std::to_string(mSkippedPrimitives) + " point and line elements skipped");
@@ -197,6 +198,7 @@ private:
             const std::uint32_t current = vertexFor(mCorners[i]);
             mOut.triangles.push_back({first, previous, current});
             mOut.triangleMaterials.push_back(currentMaterial());
+            mOut.triangleGroups.push_back(mGroup);
             previous = current;
         }
         mOut.polygonTriangles.push_back(std::uint32_t(newTriangles));
@@ -232,10 +234,27 @@ private:
             if (!name.empty() && mOut.warnings.size() < 50)
                 mOut.warnings.push_back("line " + std::to_string(mLine) + ": unknown material '" +
                                         std::string(name.substr(0, 80)) + "'");
-            mMaterial = -1;
+            // Kept under its name with the default colour: a base mesh's faces are given their
+            // texels by it (scene `texels`), with or without a material library.
+            mMaterial = name.empty() ? -1 : int(mOut.materials.size());
+            if (mMaterial >= 0) {
+                mOut.materials.emplace_back().name = std::string(name);
+                mMaterialByName.emplace(std::string(name), mMaterial);
+            }
         } else {
             mMaterial = it->second;
         }
+    }
+
+    // `g name…`: the faces that follow are in that group (none for a bare `g`).
+    void useGroup(std::string_view name) {
+        if (name.empty()) {
+            mGroup = kNoGroup;
+            return;
+        }
+        const auto [it, inserted] = mGroupByName.try_emplace(std::string(name), std::uint32_t(mOut.groups.size()));
+        if (inserted) mOut.groups.emplace_back(name);
+        mGroup = it->second;
     }
 
     void loadMaterialLibraries(std::string_view names) {
@@ -291,7 +310,7 @@ private:
             if (keyword == "newmtl") {
                 const std::string materialName(trim(args));
                 auto [it, inserted] = mMaterialByName.try_emplace(materialName, int(mOut.materials.size()));
-                if (inserted) mOut.materials.emplace_back();
+                if (inserted) mOut.materials.emplace_back().name = materialName;
                 current = it->second;
             } else if (current >= 0 && keyword == "Kd") {
                 Eigen::Vector3f kd = Eigen::Vector3f::Ones();
@@ -350,6 +369,8 @@ private:
     std::unordered_map<Corner, std::uint32_t, CornerHash> mVertexIndex;
     std::unordered_map<std::string, int> mMaterialByName;
     std::unordered_map<std::string, int> mTextureByName;
+    std::unordered_map<std::string, std::uint32_t> mGroupByName;
+    std::uint32_t mGroup = kNoGroup;
     int mMaterial = -1;
     int mDefaultMaterial = -1;
     bool mAnyNormal = false;

@@ -124,7 +124,7 @@ void addCell(Geometry& g, const render::TrilinearCell& cell) {
     for (const auto& e : edges) g.lines.insert(g.lines.end(), {v[e[0]], v[e[1]]});
 }
 
-tinygltf::Value cellExtras(const render::Scene& scene, const render::SurfaceDef& def) {
+tinygltf::Value cellExtras(const render::Scene& scene, const render::TexelPlacing& def) {
     const render::TexelDef& texel = scene.texels[*def.texel];
     tinygltf::Value::Object vtex;
     vtex["texel"] = tinygltf::Value(texel.name);
@@ -139,14 +139,19 @@ tinygltf::Value cellExtras(const render::Scene& scene, const render::SurfaceDef&
     return tinygltf::Value(extras);
 }
 
-// One surface: its base mesh node and, when textured, its cells node. Returns the node indices.
+// One surface: its base mesh node and, when textured, a cells node per texel placing (the
+// faces of each material or group its `texels` names, and the others). Returns the node indices.
 std::vector<int> addSurface(tinygltf::Model& model, const render::Scene& scene, std::size_t si, int cellMaterial,
                             LayoutSummary& summary) {
     const render::SurfaceDef& def = scene.surfaces[si];
-    if (def.texel && *def.texel >= scene.texels.size())
-        throw InputError(scene.file, "texel index out of range", "surface[" + std::to_string(si) + "].texel");
+    for (std::size_t k = 0; k < def.placingCount(); ++k)
+        if (const auto texel = def.placing(k).texel; texel && *texel >= scene.texels.size())
+            throw InputError(scene.file, "texel index out of range", "surface[" + std::to_string(si) + "].texel");
     const auto mesh = render::loadSurfaceMesh(scene, si);
-    Geometry base, cells;
+    const std::vector<std::uint32_t> placings = render::facePlacings(scene, si, *mesh);
+    Geometry base;
+    std::vector<Geometry> cells(def.placingCount());
+    std::vector<std::uint64_t> cellCount(def.placingCount(), 0);
     for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
         std::array<Vec3, 4> p, n;
         if (!ingest::patchCorners(*mesh, f, p, n))  // as the renderer places cells
@@ -154,23 +159,29 @@ std::vector<int> addSurface(tinygltf::Model& model, const render::Scene& scene, 
         const std::uint32_t b = base.add(p[0]), c1 = base.add(p[1]), c2 = base.add(p[2]), c3 = base.add(p[3]);
         base.triangles.insert(base.triangles.end(), {b, c1, c3});
         if (!mesh->isTriangle(f)) base.triangles.insert(base.triangles.end(), {b, c3, c2});
-        if (!def.texel) continue;
-        const render::TrilinearCell cell(p, n, def.height, def.placement == render::Placement::Under);
+        const render::TexelPlacing placing = def.placing(placings[f]);
+        if (!placing.texel) continue;
+        const render::TrilinearCell cell(p, n, placing.height, placing.placement == render::Placement::Under);
         // glTF positions are floats: a shell whose top lies beyond them would be written as inf.
         for (const Vec3& corner : cell.corners())
             if (!(corner.cwiseAbs().maxCoeff() <= double(std::numeric_limits<float>::max())))
                 throw InputError(def.mesh, "face " + std::to_string(f) + ": its shell reaches beyond the float range");
-        addCell(cells, cell);
+        addCell(cells[placings[f]], cell);
+        ++cellCount[placings[f]];
     }
     summary.faces += mesh->quads.size();
     const auto& d = def.material.diffuse;
     const int baseMaterial = addMaterial(model, "surface" + std::to_string(si), {d[0], d[1], d[2], 1});
     const std::string prefix = "surface" + std::to_string(si);
     std::vector<int> nodes{addNode(model, prefix + " " + def.mesh.filename().string(), base, baseMaterial)};
-    if (def.texel) {
-        summary.cells += mesh->quads.size();
-        nodes.push_back(addNode(model, prefix + " cells " + scene.texels[*def.texel].name, cells, cellMaterial,
-                                cellExtras(scene, def)));
+    for (std::size_t k = 0; k < def.placingCount(); ++k) {
+        const render::TexelPlacing placing = def.placing(k);
+        if (!placing.texel || (k > 0 && cellCount[k] == 0) || (k == 0 && cellCount[k] == 0 && !def.texels.empty()))
+            continue;
+        summary.cells += cellCount[k];
+        const std::string group = k == 0 ? "" : " " + def.texels[k - 1].name;
+        nodes.push_back(addNode(model, prefix + group + " cells " + scene.texels[*placing.texel].name, cells[k],
+                                cellMaterial, cellExtras(scene, placing)));
     }
     return nodes;
 }

@@ -197,9 +197,8 @@ Pipeline loadPipeline(const fs::path& file) {
         if (s.renderer == "reference") {
             // The reference draws each texel's source mesh: a bound texel brings the pipeline's
             // source, an unbound one needs `source =` in the scene.
-            for (const render::SurfaceDef& surface : scene.surfaces) {
-                if (!surface.texel) continue;
-                const render::TexelDef& texel = scene.texels[*surface.texel];
+            for (const std::size_t used : render::usedTexels(scene)) {
+                const render::TexelDef& texel = scene.texels.at(used);
                 if (!s.texels.count(texel.name) && texel.source.empty())
                     reader.fail(TomlReader::join(path, "renderer"),
                                 "texel '" + texel.name + "' of " + s.scene.filename().string() +

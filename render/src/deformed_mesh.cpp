@@ -57,11 +57,26 @@ struct CellOutput {
     std::vector<Eigen::Vector2f> barycentric;  // 3 per triangle
 };
 
+// The whole-unit copies of the reference volume a cell shows: its CellMap's rectangle [lo, hi],
+// copies first … end − 1 along x and y.
+struct CellTiles {
+    explicit CellTiles(const CellMap& map) {
+        map.bounds(lo, hi);
+        for (int a = 0; a < 2; ++a) {
+            first[a] = int(std::floor(lo[a]));
+            end[a] = std::max(first[a] + 1, int(std::ceil(hi[a])));
+        }
+    }
+    std::uint64_t count() const { return std::uint64_t(end[0] - first[0]) * std::uint64_t(end[1] - first[1]); }
+    Eigen::Vector2d lo, hi;
+    int first[2], end[2];
+};
+
 class CellDeformer {
 public:
-    CellDeformer(const TrilinearCell& cell, const SurfaceRuntime& surface, double tolerance, std::uint32_t sourceTriangle,
+    CellDeformer(const TrilinearCell& cell, const CellMap& map, double tolerance, std::uint32_t sourceTriangle,
                  CellOutput& out)
-        : mCell(cell), mSurface(surface), mTolerance(tolerance * cell.size()), mTriangle(sourceTriangle), mOut(out) {}
+        : mCell(cell), mMap(map), mTolerance(tolerance * cell.size()), mTriangle(sourceTriangle), mOut(out) {}
 
     void emitPolygon(const ClipPolygon& p) {
         std::array<Corner, 16> corners;
@@ -79,7 +94,7 @@ private:
     };
 
     Corner corner(const Vec3& r, const Eigen::Vector2d& b) const {
-        return {r, b, mCell.map(Vec3(r.x() / mSurface.repeatU, r.y() / mSurface.repeatV, r.z()))};
+        return {r, b, mCell.map(mMap.toCell(r))};
     }
     Corner midpoint(const Corner& p, const Corner& q) const { return corner(0.5 * (p.r + q.r), 0.5 * (p.b + q.b)); }
 
@@ -106,7 +121,7 @@ private:
     }
 
     const TrilinearCell& mCell;
-    const SurfaceRuntime& mSurface;
+    const CellMap& mMap;
     double mTolerance;
     std::uint32_t mTriangle;
     CellOutput& mOut;
@@ -130,7 +145,8 @@ DeformedMesh::DeformedMesh(const std::vector<Prim>& prims, const std::vector<Sur
                              double(source.shiftMax()[1] - source.shiftMin()[1] + 1);
         // Every source triangle lands in every copy at least once; the wrapped copies only add
         // the pieces that stick out, so they are not counted in full.
-        estimate += std::ceil(s.repeatU) * std::ceil(s.repeatV) * double(source.triangleCount()) * (wraps > 1 ? 1.1 : 1.0);
+        const CellTiles tiles(prims[i].map);
+        estimate += double(tiles.count()) * double(source.triangleCount()) * (wraps > 1 ? 1.1 : 1.0);
     }
     if (!cells.empty()) mLengthScale = lengthSum / double(cells.size());
     const double maxBytes = maxMemoryBytes > 0 ? double(maxMemoryBytes) : std::numeric_limits<double>::infinity();
@@ -152,17 +168,18 @@ DeformedMesh::DeformedMesh(const std::vector<Prim>& prims, const std::vector<Sur
             const SurfaceRuntime& surface = surfaces[std::size_t(prim.surface)];
             const SourceBvh& source = *sources[std::size_t(surface.texel)];
             CellOutput& out = outputs[c];
-            const int tilesU = int(std::ceil(surface.repeatU)), tilesV = int(std::ceil(surface.repeatV));
+            const CellTiles tiles(prim.map);
             for (std::uint32_t t = 0; t < source.triangleCount(); ++t) {
-                CellDeformer deformer(prim.cell, surface, tolerance, t, out);
+                CellDeformer deformer(prim.cell, prim.map, tolerance, t, out);
                 const auto corners = source.triangle(t);
-                for (int tj = 0; tj < tilesV; ++tj)
-                    for (int ti = 0; ti < tilesU; ++ti)
+                for (int tj = tiles.first[1]; tj < tiles.end[1]; ++tj)
+                    for (int ti = tiles.first[0]; ti < tiles.end[0]; ++ti)
                         for (int sy = source.shiftMin()[1]; sy <= source.shiftMax()[1]; ++sy)
                             for (int sx = source.shiftMin()[0]; sx <= source.shiftMax()[0]; ++sx) {
                                 const Vec3 shift(ti + sx, tj + sy, 0);
-                                const Vec3 lo(ti, tj, 0);
-                                const Vec3 hi(std::min(ti + 1.0, surface.repeatU), std::min(tj + 1.0, surface.repeatV), 1);
+                                // The copy [ti, ti + 1) × [tj, tj + 1), within what the cell shows.
+                                const Vec3 lo(std::max(double(ti), tiles.lo.x()), std::max(double(tj), tiles.lo.y()), 0);
+                                const Vec3 hi(std::min(ti + 1.0, tiles.hi.x()), std::min(tj + 1.0, tiles.hi.y()), 1);
                                 ClipPolygon a, b;
                                 a.count = 3;
                                 const Eigen::Vector2d bary[3] = {{0, 0}, {1, 0}, {0, 1}};

@@ -3,6 +3,7 @@
 // (level_bound.cpp): both must compute it the same way.
 
 #include <vtex/ingest/base_mesh.h>
+#include <vtex/render/cell_map.h>
 #include <vtex/render/geometry.h>
 
 #include <Eigen/LU>
@@ -22,10 +23,10 @@ inline double coneSpread(double fovYDegrees, int height, int strata) {
 /// World length per unit of tiled reference space around cell coordinates r: the cube root of
 /// the Jacobian of the map from tiled reference space to the world (a geometric mean over the
 /// three directions).
-inline double localScale(const TrilinearCell& cell, const Vec3& r, double repeatU, double repeatV) {
-    const double det = std::abs(cell.jacobian(r).determinant()) / (repeatU * repeatV);
+inline double localScale(const TrilinearCell& cell, const Vec3& r, const CellMap& map) {
+    const double det = std::abs(cell.jacobian(r).determinant()) / map.areaScale();
     const double scale = std::cbrt(det);
-    return scale > 0 && std::isfinite(scale) ? scale : cell.size() / std::max(repeatU, repeatV);
+    return scale > 0 && std::isfinite(scale) ? scale : cell.size() / map.maxExtent();
 }
 
 /// The corners of base face `face` in the order of the bilinear patch (ingest::patchCorners).

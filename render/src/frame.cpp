@@ -28,6 +28,24 @@ void checkSceneRange(const Scene& scene) {
             throw InputError(scene.file, "a coordinate" + limit, "light[" + std::to_string(i) + "].position");
 }
 
+// A shift, or a sub-rectangle beyond the unit square, shows a texel's pattern cut inside each
+// face unless the texel is cyclic (docs/render.md, "Per-face perturbation"): refused, naming the
+// key.
+void checkTiling(const Scene& scene, std::size_t si, std::size_t k) {
+    const SurfaceDef& def = scene.surfaces[si];
+    const TexelPlacing placing = def.placing(k);
+    if (!placing.texel) return;
+    const auto& r = placing.subrect;
+    const bool outside = r && ((*r)[0] < 0 || (*r)[1] < 0 || (*r)[2] > 1 || (*r)[3] > 1);
+    if ((!placing.perturb.shift && !outside) || texelIsCyclic(scene, *placing.texel)) return;
+    const std::string surface = "surface[" + std::to_string(si) + "]";
+    const std::string key = k == 0 ? surface : surface + ".texels." + def.texels[k - 1].name;
+    const std::string texel = "texel '" + scene.texels[*placing.texel].name + "' is not cyclic";
+    if (placing.perturb.shift)
+        throw InputError(scene.file, texel + " (a shift would cut its pattern inside each face)", key + ".perturb.shift");
+    throw InputError(scene.file, texel + ": the sub-rectangle must lie within [0, 1]²", key + ".subrect");
+}
+
 }  // namespace
 
 SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
@@ -36,28 +54,38 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
     std::vector<Prim> prims;
     for (std::size_t si = 0; si < scene.surfaces.size(); ++si) {
         const SurfaceDef& def = scene.surfaces[si];
-        if (def.texel && *def.texel >= scene.texels.size())
-            throw InputError(scene.file, "texel index out of range", "surface.texel");
-        SurfaceRuntime s;
-        s.material = def.material;
-        s.texel = def.texel ? int(*def.texel) : -1;
-        s.repeatU = def.repeat[0];
-        s.repeatV = def.repeat[1];
-        s.height = def.height;
-        geometry.surfaces.push_back(s);
+        // One runtime surface per placing (SurfaceDef::placing): the faces of each material or
+        // group named in `texels`, and the others.
+        const std::size_t first = geometry.surfaces.size();
+        for (std::size_t k = 0; k < def.placingCount(); ++k) {
+            const TexelPlacing placing = def.placing(k);
+            if (placing.texel && *placing.texel >= scene.texels.size())
+                throw InputError(scene.file, "texel index out of range", "surface.texel");
+            checkTiling(scene, si, k);
+            SurfaceRuntime s;
+            s.material = def.material;
+            s.texel = placing.texel ? int(*placing.texel) : -1;
+            s.placing = placing;
+            s.height = placing.height;
+            s.under = placing.placement == Placement::Under;
+            geometry.surfaces.push_back(s);
+        }
         const auto mesh = loadSurfaceMesh(scene, si);
+        const std::vector<std::uint32_t> placings = facePlacings(scene, si, *mesh);
         for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
             Prim prim;
-            prim.surface = int(si);
+            prim.surface = int(first + placings[f]);
             prim.face = int(f);
+            const SurfaceRuntime& s = geometry.surfaces[std::size_t(prim.surface)];
             if (!baseFaceCorners(*mesh, f, prim.p, prim.n))
                 throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
             for (const Vec3& corner : prim.p)  // the shell's top is within `height` of its corners
-                if (!inRange(corner) || !(corner.cwiseAbs().maxCoeff() + std::abs(def.height) <= kMaxSceneCoordinate))
+                if (!inRange(corner) || !(corner.cwiseAbs().maxCoeff() + std::abs(s.height) <= kMaxSceneCoordinate))
                     throw InputError(def.mesh, "face " + std::to_string(f) + " has a corner (or its shell) beyond ±1e12, "
                                      "the renderers' exact range");
-            if (def.texel) {
-                prim.cell = TrilinearCell(prim.p, prim.n, def.height, def.placement == Placement::Under);
+            if (s.texel >= 0) {
+                prim.cell = TrilinearCell(prim.p, prim.n, s.height, s.under);
+                prim.map = makeCellMap(s.placing, drawFaceTransform(s.placing.perturb, f));
                 ++geometry.cells;
                 if (cellsAsFloors)
                     prim.p = prim.cell.faceCorners(0);
@@ -72,26 +100,18 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
     return geometry;
 }
 
-Mat3 tiledJacobian(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
-    Mat3 j = cell.jacobian(r);
-    j.col(0) /= s.repeatU;
-    j.col(1) /= s.repeatV;
-    return j;
-}
+Mat3 tiledJacobian(const Prim& prim, const Vec3& r) { return prim.cell.jacobian(r) * prim.map.linearInverse(); }
 
-double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s) {
-    return localScale(cell, r, s.repeatU, s.repeatV);
-}
+double localScale(const Prim& prim, const Vec3& r) { return localScale(prim.cell, r, prim.map); }
 
-SourcePoint sourcePoint(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const Vec3& referenceNormal,
-                        const Vec3& d) {
+SourcePoint sourcePoint(const Prim& prim, const Vec3& rt, const Vec3& referenceNormal, const Vec3& d) {
     SourcePoint p;
-    p.cell = Vec3(rt.x() / surface.repeatU, rt.y() / surface.repeatV, rt.z());
+    p.cell = prim.map.toCell(rt);
     p.world = prim.cell.map(p.cell);
-    const Vec3 n = tiledJacobian(prim.cell, p.cell, surface).inverse().transpose() * referenceNormal;
+    const Vec3 n = tiledJacobian(prim, p.cell).inverse().transpose() * referenceNormal;
     const double length = n.norm();
     p.normal = length > 0 && std::isfinite(length) ? Vec3(n / length) : Vec3(-d);
-    p.scale = localScale(prim.cell, p.cell, surface);
+    p.scale = localScale(prim, p.cell);
     return p;
 }
 
@@ -189,8 +209,9 @@ std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& option
     std::vector<bool> used(scene.texels.size(), false);
     for (const SurfaceDef& s : scene.surfaces) {
         if (!s.meshData) bytes += 32 * fileBytes(s.mesh);
-        if (s.texel && *s.texel < used.size()) used[*s.texel] = true;
     }
+    for (const std::size_t t : usedTexels(scene))
+        if (t < used.size()) used[t] = true;
     for (std::size_t t = 0; t < scene.texels.size(); ++t) {
         if (!used[t]) continue;
         if (!scene.texels[t].octree) bytes += 3 * fileBytes(scene.texels[t].volume);

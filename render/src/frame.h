@@ -27,16 +27,19 @@
 
 namespace vtex::render::detail {
 
+/// The faces of one placing of a scene surface (SurfaceDef::placing): a texel per face comes
+/// as one of these per material or group.
 struct SurfaceRuntime {
     Material material;
     int texel = -1;
-    double repeatU = 1, repeatV = 1;
+    TexelPlacing placing;  ///< its height, placement, repeat or sub-rectangle
     double height = 0;
+    bool under = false;
 };
 
 /// The base faces of a scene: plain patches, and cells over the faces of textured surfaces.
 struct SceneGeometry {
-    std::vector<SurfaceRuntime> surfaces;
+    std::vector<SurfaceRuntime> surfaces;  ///< Prim::surface indexes these
     std::unique_ptr<Tracer> tracer;
     std::uint64_t faces = 0;
     std::uint64_t cells = 0;
@@ -114,15 +117,16 @@ inline std::vector<std::string> renderWarnings(const Scene& scene, const std::ve
 RenderStats summarize(const std::vector<Counters>& tileCounters, const SceneGeometry& geometry, int threads,
                       int width, int height, int spp, double wallSeconds, double loadSeconds);
 
-/// Tiled reference coordinates of cell coordinates r on surface s: x and y times its repeat.
-inline Vec3 tile(const Vec3& r, const SurfaceRuntime& s) { return {r.x() * s.repeatU, r.y() * s.repeatV, r.z()}; }
+/// Tiled reference coordinates of cell coordinates r of a textured face (its CellMap: the
+/// repeat or sub-rectangle, and the face's perturbation).
+inline Vec3 tile(const Vec3& r, const Prim& prim) { return prim.map.toReference(r); }
 
-/// The Jacobian at cell coordinates r of the map from tiled reference space to the world:
-/// the cell's, its first two columns divided by the surface's repeat.
-Mat3 tiledJacobian(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s);
+/// The Jacobian at cell coordinates r of the map from tiled reference space to the world: the
+/// cell's, times the inverse of the face's CellMap.
+Mat3 tiledJacobian(const Prim& prim, const Vec3& r);
 
 /// World length per unit of tiled reference space around cell coordinates r (footprint.h).
-double localScale(const TrilinearCell& cell, const Vec3& r, const SurfaceRuntime& s);
+double localScale(const Prim& prim, const Vec3& r);
 
 /// A hit on a texel's source mesh at tiled reference coordinates `rt` as both renderers shade
 /// it: its cell coordinates, world point, unit world normal (the triangle's reference normal
@@ -132,8 +136,7 @@ struct SourcePoint {
     Vec3 cell, world, normal;
     double scale = 1;
 };
-SourcePoint sourcePoint(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const Vec3& referenceNormal,
-                        const Vec3& d);
+SourcePoint sourcePoint(const Prim& prim, const Vec3& rt, const Vec3& referenceNormal, const Vec3& d);
 
 inline Vec3 bilerp(const std::array<Vec3, 4>& p, double u, double v) {
     const Vec3 a = p[0] + u * (p[1] - p[0]);

@@ -20,17 +20,28 @@ std::vector<TexelLevelNeed> finestUsefulLevels(const Scene& scene, const RenderO
     std::vector<double> finest(scene.texels.size(), -std::numeric_limits<double>::infinity());
     std::vector<double> nearest(scene.texels.size(), std::numeric_limits<double>::infinity());
     for (std::size_t si = 0; si < scene.surfaces.size(); ++si) {
-        const SurfaceDef& surface = scene.surfaces[si];
-        if (!surface.texel) continue;
-        if (*surface.texel >= scene.texels.size()) throw InputError(scene.file, "texel index out of range", "surface.texel");
-        const std::size_t texel = *surface.texel;
-        needs[texel].used = true;
+        const SurfaceDef& def = scene.surfaces[si];
+        bool textured = false;
+        for (std::size_t k = 0; k < def.placingCount(); ++k)
+            if (const auto texel = def.placing(k).texel) {
+                if (*texel >= scene.texels.size()) throw InputError(scene.file, "texel index out of range", "surface.texel");
+                textured = true;
+            }
+        if (!textured) continue;
         const auto mesh = loadSurfaceMesh(scene, si);
+        const std::vector<std::uint32_t> placings = facePlacings(scene, si, *mesh);
         for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
+            const TexelPlacing surface = def.placing(placings[f]);
+            if (!surface.texel) continue;
+            const std::size_t texel = *surface.texel;
+            needs[texel].used = true;
             std::array<Vec3, 4> p, n;
             if (!detail::baseFaceCorners(*mesh, f, p, n))
-                throw InputError(surface.mesh, "face " + std::to_string(f) + " has an invalid corner");
+                throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
             const TrilinearCell cell(p, n, surface.height, surface.placement == Placement::Under);
+            // The face's perturbation turns and shifts its map, which changes no scale: the
+            // unperturbed map gives the same local scales.
+            const CellMap map = makeCellMap(surface, FaceTransform{});
             Vec3 lo = cell.corners()[0], hi = cell.corners()[0];
             for (const Vec3& c : cell.corners()) {
                 lo = lo.cwiseMin(c);
@@ -40,7 +51,7 @@ std::vector<TexelLevelNeed> finestUsefulLevels(const Scene& scene, const RenderO
             double scale = 0;
             for (int i = 0; i < 27; ++i)
                 scale = std::max(scale, detail::localScale(cell, Vec3(0.5 * (i % 3), 0.5 * (i / 3 % 3), 0.5 * (i / 9)),
-                                                           surface.repeat[0], surface.repeat[1]));
+                                                           map));
             nearest[texel] = std::min(nearest[texel], distance);
             const double width = spread * distance / scale;
             const double level = width > 0 ? -std::log2(width) : std::numeric_limits<double>::infinity();

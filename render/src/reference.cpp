@@ -84,7 +84,7 @@ private:
                 return opaque(hit->t, shadeFloor(prim, surface, span.rIn, d, counters));
             if (const auto rIn = detail::entryCoords(prim, *hit, o, d, -1, Vec3::Zero())) {
                 ++counters.segments;
-                const Vec3 p0 = tile(*rIn, surface), p1 = tile(span.rOut, surface);
+                const Vec3 p0 = tile(*rIn, prim), p1 = tile(span.rOut, prim);
                 const SourceRuntime& source = mSources[std::size_t(surface.texel)];
                 if (const auto h = source.bvh->intersect(p0, p1, 0)) {
                     const double t = hit->t + h->s * (span.tOut - hit->t);
@@ -121,8 +121,8 @@ private:
         ++counters.shadow;
         return detail::walkShadowRay(
             mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, 0,
-            [&](const Prim&, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint, double) {
-                return mSources[std::size_t(surface.texel)].bvh->occludedLeaving(tile(rIn, surface), tile(rOut, surface),
+            [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint, double) {
+                return mSources[std::size_t(surface.texel)].bvh->occludedLeaving(tile(rIn, prim), tile(rOut, prim),
                                                                                  startsAtHint)
                            ? 0.0
                            : 1.0;
@@ -165,7 +165,7 @@ private:
     // through the inverse transpose of the tiled map's Jacobian there.
     Color shadeSource(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const detail::SourceHit& hit,
                       const Vec3& d, Counters& counters) const {
-        const detail::SourcePoint p = detail::sourcePoint(prim, surface, rt, hit.normal, d);
+        const detail::SourcePoint p = detail::sourcePoint(prim, rt, hit.normal, d);
         const int primIndex = int(&prim - mTracer.prims().data());
         const SourceRuntime& source = mSources[std::size_t(surface.texel)];
         return detail::shadePhong(mLights, p.world, p.normal, p.normal, -d, source.material, hit.albedo, p.scale,
@@ -202,19 +202,18 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     std::vector<const detail::SourceBvh*> bvhs(scene.texels.size(), nullptr);
     std::uint64_t sourceTriangles = 0;
     RenderStats vtoBytes;  // only its .vto counts
-    for (const SurfaceDef& s : scene.surfaces) {
-        if (!s.texel || sources[*s.texel].bvh) continue;
-        const TexelDef& def = scene.texels[*s.texel];
+    for (const std::size_t t : usedTexels(scene)) {
+        const TexelDef& def = scene.texels.at(t);
         if (!def.sourceData && def.source.empty())
             throw InputError(scene.file, "texel '" + def.name + "' has no source mesh (vtex reference draws it)", "texel.source");
-        SourceRuntime& runtime = sources[*s.texel];
-        runtime.mesh = loadTexelSource(scene, *s.texel);
+        SourceRuntime& runtime = sources[t];
+        runtime.mesh = loadTexelSource(scene, t);
         // Where the sampler put the mesh in the unit cube is recorded in the volume.
-        const auto volume = loadTexelVolume(scene, *s.texel);
+        const auto volume = loadTexelVolume(scene, t);
         runtime.bvh = std::make_unique<detail::SourceBvh>(*runtime.mesh, volume->info.source);
         detail::countVtoBytes(def, *volume, vtoBytes);
         runtime.material = def.material;
-        bvhs[*s.texel] = runtime.bvh.get();
+        bvhs[t] = runtime.bvh.get();
         sourceTriangles += runtime.mesh->triangles.size();
     }
     std::unique_ptr<detail::DeformedMesh> deformed;

@@ -184,10 +184,10 @@ private:
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
         const int primIndex = int(&prim - mTracer.prims().data());
         const double tMid = 0.5 * (tIn + tOut);
-        const double scale = localScale(prim.cell, 0.5 * (rIn + rOut), surface);
+        const double scale = localScale(prim, 0.5 * (rIn + rOut));
         const int maxLevel = texel.volume->maxLevel();
         const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
-        const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
+        const Vec3 p0 = tile(rIn, prim), p1 = tile(rOut, prim);
         const double length = (p1 - p0).norm();
         if (!(length > 0) || !std::isfinite(length)) return;
         ++counters.segments;
@@ -201,7 +201,7 @@ private:
         const double meshWeight = cut(texel.meshWeight(choice.requested));
         counters.mesh += meshWeight;
         if (meshWeight >= 1) {  // the mesh alone: none of the volume's per-span set-up
-            compositeSpan(traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid, state);
+            compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid, state);
             return;
         }
         SpanContext span(mScene, mOptions, mShadows, prim, primIndex, surface, texel, rIn, rOut, tIn, tOut, scale,
@@ -220,7 +220,7 @@ private:
             if (fineWeight > 0) blend(result, mMarcher.march(span, choice.fine, false, fineWeight, counters), fineWeight);
         }
         if (meshWeight > 0)
-            blend(result, traceSourceSpan(prim, surface, texel, p0, p1, tIn, tOut, d, counters), meshWeight);
+            blend(result, traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, counters), meshWeight);
         compositeSpan(result, choice.level, tMid, state);
     }
 
@@ -245,11 +245,11 @@ private:
     // reference renderer shades it (the texel's material, the mesh's albedo, the normal taken
     // to the world by the inverse transpose of the tiled map's Jacobian), its shadows by the
     // hybrid rule of tracedShadow.
-    SpanResult traceSourceSpan(const Prim& prim, const SurfaceRuntime& surface, const TexelRuntime& texel, const Vec3& p0,
+    SpanResult traceSourceSpan(const Prim& prim, const TexelRuntime& texel, const Vec3& p0,
                                const Vec3& p1, double tIn, double tOut, const Vec3& d, Counters& counters) const {
         const auto hit = texel.source->intersect(p0, p1, 0);
         if (!hit) return {};
-        const detail::SourcePoint p = detail::sourcePoint(prim, surface, p0 + hit->s * (p1 - p0), hit->normal, d);
+        const detail::SourcePoint p = detail::sourcePoint(prim, p0 + hit->s * (p1 - p0), hit->normal, d);
         const int primIndex = int(&prim - mTracer.prims().data());
         const double t = tIn + hit->s * (tOut - tIn);
         const Color radiance = detail::shadePhong(
@@ -277,8 +277,7 @@ std::uint64_t latticeMemoryCap(const Scene& scene, const RenderOptions& options)
     if (options.approximations.shadowCacheResolution <= 0) return 0;
     const bool directional = std::any_of(scene.lights.begin(), scene.lights.end(),
                                          [](const Light& l) { return l.type == LightType::Directional; });
-    const bool textured = std::any_of(scene.surfaces.begin(), scene.surfaces.end(),
-                                      [](const SurfaceDef& s) { return s.texel.has_value(); });
+    const bool textured = !usedTexels(scene).empty();
     return directional && textured ? std::uint64_t(detail::LightTransmittanceCache::kMaxNodes) * sizeof(float) : 0;
 }
 

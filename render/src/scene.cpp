@@ -10,6 +10,7 @@
 #include <toml++/toml.h>
 
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -35,7 +36,7 @@ namespace fs = std::filesystem;
 // The scene's own value kinds on top of the shared checked TOML reader.
 class Reader : public TomlReader {
 public:
-    using TomlReader::TomlReader;
+    Reader(const fs::path& file, std::vector<std::string>& warnings) : TomlReader(file, warnings), mSceneWarnings(warnings) {}
 
     template <int N>
     Eigen::Matrix<double, N, 1> vector(const toml::table& table, const std::string& path, std::string_view name,
@@ -59,6 +60,97 @@ public:
         return out;
     }
 
+    // The height, placement and repeat or sub-rectangle of `t` (a surface or one of its `texels`
+    // entries), each defaulting to `base`'s.
+    TexelPlacing placing(const toml::table& t, const std::string& p, TexelPlacing base) {
+        base.height = number(t, p, "height", base.height, 0, 1e30, true);
+        const std::string placement = choice(t, p, "placement", std::string(base.placement == Placement::Under ? "under" : "on"),
+                                             {"on", "under"});
+        base.placement = placement == "under" ? Placement::Under : Placement::On;
+        if (t.get("repeat") && t.get("subrect")) fail(join(p, "subrect"), "give repeat or subrect, not both");
+        if (t.get("repeat")) {
+            const Eigen::Vector2d repeat = vector<2>(t, p, "repeat", std::nullopt);
+            for (int k = 0; k < 2; ++k)
+                if (!(repeat[k] > 0 && repeat[k] <= 1e6)) fail(join(p, "repeat"), "components must be in (0, 1e6]");
+            base.repeat = {repeat[0], repeat[1]};
+            base.subrect.reset();
+        }
+        if (t.get("subrect")) {
+            // [x0, y0, x1, y1] in reference units; whether it may leave the unit square depends
+            // on the texel (cyclic or not), checked where the volume is known (cell_map.h).
+            const Eigen::Vector4d r = vector<4>(t, p, "subrect", std::nullopt, -1e6, 1e6);
+            if (!(r[2] > r[0] && r[3] > r[1])) fail(join(p, "subrect"), "must be [x0, y0, x1, y1] with x1 > x0 and y1 > y0");
+            base.subrect = std::array<double, 4>{r[0], r[1], r[2], r[3]};
+            base.repeat = {1, 1};
+        }
+        if (t.get("perturb")) base.perturb = perturbation(t, p);
+        return base;
+    }
+
+    std::size_t texelIndex(const Scene& scene, const std::string& key, const std::string& name) const {
+        for (std::size_t k = 0; k < scene.texels.size(); ++k)
+            if (scene.texels[k].name == name) return k;
+        fail(key, "no [[texel]] is named '" + name + "'");
+    }
+
+    // `texels = { name = "texel" | { texel = "…", height, placement, repeat, subrect } }`: the
+    // faces of a material or group, each entry defaulting to the surface's own placing.
+    std::vector<NamedPlacing> namedPlacings(const Scene& scene, const toml::table& t, const std::string& p,
+                                            const TexelPlacing& own) {
+        std::vector<NamedPlacing> out;
+        const toml::table* map = subtable(t, p, "texels", false);
+        if (!map) return out;
+        for (const auto& [name, node] : *map) {
+            const std::string key = join(join(p, "texels"), name.str());
+            NamedPlacing entry{std::string(name.str()), own};
+            if (const auto* texel = node.as_string()) {
+                entry.placing.texel = texelIndex(scene, key, texel->get());
+            } else if (const auto* table = node.as_table()) {
+                checkKeys(*table, key, {"texel", "height", "placement", "repeat", "subrect", "perturb"});
+                entry.placing = placing(*table, key, own);
+                entry.placing.texel = texelIndex(scene, join(key, "texel"), string(*table, key, "texel", std::nullopt));
+            } else {
+                fail(key, "must be a texel name or a table with a 'texel' key");
+            }
+            out.push_back(std::move(entry));
+        }
+        return out;
+    }
+
+    Perturbation perturbation(const toml::table& t, const std::string& p) {
+        Perturbation out;
+        const toml::table* q = subtable(t, p, "perturb", false);
+        if (!q) return out;
+        const std::string pp = join(p, "perturb");
+        checkKeys(*q, pp, {"seed", "rotate", "mirror", "shift"});
+        out.seed = std::uint64_t(integer(*q, pp, "seed", 0, 0, std::numeric_limits<long long>::max()));
+        out.rotate = boolean(*q, pp, "rotate", false);
+        out.mirror = boolean(*q, pp, "mirror", false);
+        out.shift = boolean(*q, pp, "shift", false);
+        return out;
+    }
+
+    SurfaceDef surface(const Scene& scene, const toml::table& t, const std::string& p) {
+        checkKeys(t, p, {"mesh", "texel", "height", "placement", "repeat", "subrect", "texels", "perturb", "material"});
+        SurfaceDef s;
+        s.mesh = resolve(p + ".mesh", string(t, p, "mesh", std::nullopt));
+        if (t.get("texel")) s.texel = texelIndex(scene, p + ".texel", string(t, p, "texel", std::nullopt));
+        const TexelPlacing own = placing(t, p, s.placing(0));
+        s.height = own.height;
+        s.placement = own.placement;
+        s.repeat = own.repeat;
+        s.subrect = own.subrect;
+        s.perturb = own.perturb;
+        s.texels = namedPlacings(scene, t, p, own);
+        s.material = material(t, p, Material{});
+        if (!s.texel && s.texels.empty() &&
+            (t.get("height") || t.get("placement") || t.get("repeat") || t.get("subrect") || t.get("perturb")))
+            warn(p + ": height/placement/repeat/subrect/perturb ignored on a surface without a texel");
+        return s;
+    }
+
+    void warn(const std::string& what) { mSceneWarnings.push_back(file().string() + ": " + what); }
+
     Material material(const toml::table& parent, const std::string& path, const Material& defaults) {
         const toml::table* t = subtable(parent, path, "material", false);
         if (!t) return defaults;
@@ -71,6 +163,9 @@ public:
         m.shininess = number(*t, p, "shininess", defaults.shininess, 0, 1e6);
         return m;
     }
+
+private:
+    std::vector<std::string>& mSceneWarnings;
 };
 
 }  // namespace
@@ -145,38 +240,21 @@ Scene parseScene(std::string_view text, const std::filesystem::path& file) {
 
     // Surfaces.
     const auto surfaces = r.arrayOfTables(root, "surface");
-    for (std::size_t i = 0; i < surfaces.size(); ++i) {
-        const toml::table& t = *surfaces[i];
-        const std::string p = "surface[" + std::to_string(i) + "]";
-        r.checkKeys(t, p, {"mesh", "texel", "height", "placement", "repeat", "material"});
-        SurfaceDef s;
-        s.mesh = r.resolve(p + ".mesh", r.string(t, p, "mesh", std::nullopt));
-        if (t.get("texel")) {
-            const std::string name = r.string(t, p, "texel", std::nullopt);
-            for (std::size_t k = 0; k < scene.texels.size(); ++k)
-                if (scene.texels[k].name == name) s.texel = k;
-            if (!s.texel) r.fail(p + ".texel", "no [[texel]] is named '" + name + "'");
-        }
-        s.height = r.number(t, p, "height", 0.1, 0, 1e30, true);
-        const std::string placement = r.string(t, p, "placement", std::string("on"));
-        if (placement == "on") s.placement = Placement::On;
-        else if (placement == "under") s.placement = Placement::Under;
-        else r.fail(p + ".placement", "must be \"on\" or \"under\", got \"" + placement + "\"");
-        const Eigen::Vector2d repeat = r.vector<2>(t, p, "repeat", Eigen::Vector2d(1, 1));
-        for (int k = 0; k < 2; ++k)
-            if (!(repeat[k] > 0 && repeat[k] <= 1e6)) r.fail(p + ".repeat", "components must be in (0, 1e6]");
-        s.repeat = {repeat[0], repeat[1]};
-        s.material = r.material(t, p, Material{});
-        if (!s.texel && (t.get("height") || t.get("placement") || t.get("repeat")))
-            scene.warnings.push_back(file.string() + ": " + p +
-                                     ": height/placement/repeat ignored on a surface without a texel");
-        scene.surfaces.push_back(std::move(s));
-    }
+    for (std::size_t i = 0; i < surfaces.size(); ++i)
+        scene.surfaces.push_back(r.surface(scene, *surfaces[i], "surface[" + std::to_string(i) + "]"));
     return scene;
 }
 
 Scene loadScene(const std::filesystem::path& file) {
     return parseScene(readInputFile(file, std::uint64_t(64) << 20, "scene file"), file);
+}
+
+std::vector<std::size_t> usedTexels(const Scene& scene) {
+    std::set<std::size_t> used;
+    for (const SurfaceDef& s : scene.surfaces)
+        for (std::size_t k = 0; k < s.placingCount(); ++k)
+            if (const auto texel = s.placing(k).texel) used.insert(*texel);
+    return {used.begin(), used.end()};
 }
 
 std::vector<std::filesystem::path> sceneFiles(const Scene& scene) {

@@ -50,4 +50,33 @@ std::shared_ptr<const ingest::TriangleMesh> loadTexelSource(const Scene& scene, 
                         [&] { return std::make_shared<const ingest::TriangleMesh>(ingest::loadMesh(def.source)); });
 }
 
+bool texelIsCyclic(const Scene& scene, std::size_t texel) { return loadTexelVolume(scene, texel)->info.source.cyclic; }
+
+std::vector<std::uint32_t> facePlacings(const Scene& scene, std::size_t surface, const ingest::QuadMesh& mesh) {
+    const SurfaceDef& def = scene.surfaces.at(surface);
+    std::vector<std::uint32_t> placings(mesh.quads.size(), 0);
+    if (def.texels.empty()) return placings;
+    // Per name of the mesh, the entry it selects (k + 1), 0 for none.
+    std::vector<std::uint32_t> byName(mesh.names.size(), 0);
+    for (std::size_t n = 0; n < mesh.names.size(); ++n)
+        for (std::size_t k = 0; k < def.texels.size(); ++k)
+            if (def.texels[k].name == mesh.names[n]) byName[n] = std::uint32_t(k + 1);
+    std::vector<char> used(def.texels.size(), 0);
+    const auto entryOf = [&](std::uint32_t name) { return name < byName.size() ? byName[name] : 0u; };
+    for (std::size_t f = 0; f < placings.size() && f < mesh.faceNames.size(); ++f) {
+        // The material's entry first, then the group's.
+        std::uint32_t k = entryOf(mesh.faceNames[f][0]);
+        if (!k) k = entryOf(mesh.faceNames[f][1]);
+        placings[f] = k;
+        if (k) used[k - 1] = 1;
+    }
+    for (std::size_t k = 0; k < def.texels.size(); ++k)
+        if (!used[k])
+            throw InputError(scene.file.empty() ? def.mesh : scene.file,
+                             "no face of " + def.mesh.filename().string() + " has the material or group '" +
+                                 def.texels[k].name + "'",
+                             indexedKey("surface", surface, "texels.") + def.texels[k].name);
+    return placings;
+}
+
 }  // namespace vtex::render

@@ -80,13 +80,13 @@ public:
         if (span) {
             lr = span->light;
         } else {
-            lr = tiledJacobian(prim.cell, r, surface).inverse() * l;
+            lr = tiledJacobian(prim, r).inverse() * l;
             const double len = lr.norm();
             if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
             lr /= len;
         }
-        const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim.cell, r, surface)));
-        const CellMarch near = marchInCell(texel, surface, tile(r, surface), lr,
+        const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim, r)));
+        const CellMarch near = marchInCell(texel, prim, r, lr,
                                            kExactLatticeSteps / double(mLightCache.grid(primIndex).nw), level);
         counters.voxels += near.blocks;
         if (near.exitFace == 0 || near.transmittance <= kTransmittanceCutoff) return 0;
@@ -123,17 +123,17 @@ public:
         Counters uncounted;
         const auto exactFrom = [&](const Vec3& r) {
             return tracedShadow(prim.cell.map(r), l, std::numeric_limits<double>::infinity(),
-                                localScale(prim.cell, r, surface) * spacing, primIndex, r, uncounted);
+                                localScale(prim, r) * spacing, primIndex, r, uncounted);
         };
         const LevelChoice choice = chooseLevel(spacing, mOptions.lodBias, texel.volume->maxLevel());
         if (depth >= kMaxChain || texel.meshWeight(choice.requested) > 0 ||
             !mOptions.approximations.chainLatticeNodes)
             return exactFrom(rn);
-        Vec3 lr = tiledJacobian(prim.cell, rn, surface).inverse() * l;
+        Vec3 lr = tiledJacobian(prim, rn).inverse() * l;
         const double len = lr.norm();
         if (!(len > 0) || !std::isfinite(len)) return exactFrom(rn);
         lr /= len;
-        const CellMarch m = marchInCell(texel, surface, tile(rn, surface), lr, std::numeric_limits<double>::infinity(),
+        const CellMarch m = marchInCell(texel, prim, rn, lr, std::numeric_limits<double>::infinity(),
                                         shadowLevel(texel, choice));
         if (m.exitFace == 0 || m.transmittance <= kTransmittanceCutoff) return 0;
         const CellNeighbour& next = m.exitFace >= 2 ? mAdjacency.across(primIndex, m.exitFace) : CellNeighbour{};
@@ -151,8 +151,8 @@ public:
             [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint,
                 double transmittance) {
                 const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
-                const Vec3 p0 = tile(rIn, surface), p1 = tile(rOut, surface);
-                const LevelChoice choice = chooseLevel(width / localScale(prim.cell, 0.5 * (rIn + rOut), surface),
+                const Vec3 p0 = tile(rIn, prim), p1 = tile(rOut, prim);
+                const LevelChoice choice = chooseLevel(width / localScale(prim, 0.5 * (rIn + rOut)),
                                                        mOptions.lodBias, texel.volume->maxLevel());
                 // The hybrid's rule for shadows too: the source mesh where the footprint is finer
                 // than the volume is faithful, blended over the next level.
@@ -179,28 +179,31 @@ public:
         return std::max(texel.coarsestShadowLevel, choice.fineWeight < 0.5 ? choice.coarse : choice.fine);
     }
 
-    // A march from tiled reference point p0 along the unit reference direction lr, at most
-    // `maxStep` far and not past the cell's sides, top or floor: its transmittance, where it ends
-    // (cell coordinates) and the face it stopped on (TrilinearCell numbering; −1 when maxStep
-    // ended it inside). Straight in reference space: the mild-deformation assumption of the march.
+    // A march from cell coordinates r along the unit reference direction lr, at most `maxStep`
+    // far (reference units) and not past the cell's sides, top or floor: its transmittance, where
+    // it ends (cell coordinates) and the face it stopped on (TrilinearCell numbering; −1 when
+    // maxStep ended it inside). The sides are u, v = 0 and 1 in cell coordinates, whatever the
+    // face's CellMap (its quarter turns, mirrors, shifts and sub-rectangle). Straight in
+    // reference space: the mild-deformation assumption of the march.
     struct CellMarch {
         double transmittance = 1;
         Vec3 end;
         int exitFace = -1;
         std::uint64_t blocks = 0;
     };
-    CellMarch marchInCell(const TexelRuntime& texel, const SurfaceRuntime& surface, const Vec3& p0, const Vec3& lr,
-                          double maxStep, int level) const {
+    CellMarch marchInCell(const TexelRuntime& texel, const Prim& prim, const Vec3& r, const Vec3& lr, double maxStep,
+                          int level) const {
         CellMarch m;
         double step = maxStep;
-        const double extent[2] = {surface.repeatU, surface.repeatV};
+        const Vec3 p0 = tile(r, prim);
+        const Vec3 lc = prim.map.linearInverse() * lr;
         for (int a = 0; a < 2; ++a) {
             double s = std::numeric_limits<double>::infinity();
-            if (lr[a] > 0) s = std::max(0.0, (extent[a] - p0[a]) / lr[a]);
-            else if (lr[a] < 0) s = std::max(0.0, -p0[a] / lr[a]);
+            if (lc[a] > 0) s = std::max(0.0, (1 - r[a]) / lc[a]);
+            else if (lc[a] < 0) s = std::max(0.0, -r[a] / lc[a]);
             if (s < step) {
                 step = s;
-                m.exitFace = 2 + 2 * a + (lr[a] > 0 ? 1 : 0);
+                m.exitFace = 2 + 2 * a + (lc[a] > 0 ? 1 : 0);
             }
         }
         if (p0.z() + step * lr.z() > 1) {
@@ -215,7 +218,10 @@ public:
         const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level, kTransmittanceCutoff);
         m.transmittance = seg.transmittance;
         m.blocks = seg.blocks;
-        m.end = Vec3(p1.x() / surface.repeatU, p1.y() / surface.repeatV, p1.z());
+        m.end = prim.map.toCell(p1);
+        // The face it stopped on exactly, not a rounding away from it: the neighbour's lattice is
+        // looked up there.
+        if (m.exitFace >= 2) m.end[(m.exitFace - 2) / 2] = double(m.exitFace % 2);
         return m;
     }
 
@@ -240,9 +246,9 @@ private:
             for (std::size_t i = 0; i < grids.size(); ++i) {
                 const Prim& prim = mTracer.prims()[i];
                 if (!prim.textured) continue;
-                const SurfaceRuntime& s = mSurfaces[std::size_t(prim.surface)];
-                const auto across = [&](double repeat) { return n * int(std::clamp(std::ceil(repeat), 1.0, 4.0)); };
-                grids[i] = {across(s.repeatU), across(s.repeatV), n};
+                // Tiles of the texel along the cell's u and v: the lengths of the CellMap's columns.
+                const auto across = [&](double tiles) { return n * int(std::clamp(std::ceil(tiles), 1.0, 4.0)); };
+                grids[i] = {across(prim.map.a.col(0).norm()), across(prim.map.a.col(1).norm()), n};
                 total += double(grids[i].nodes()) * double(directions.size());
             }
         if (total > LightTransmittanceCache::kMaxNodes) return {};

@@ -49,8 +49,8 @@ SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const
     : prim(prim_), primIndex(primIndex_), surface(surface_), texel(texel_), tIn(tIn_), tOut(tOut_), scale(scale_),
       startT(startTransmittance), shareDistance(1.0 / double(std::int64_t(1) << coarseLevel)),
       lights(scene.lights.size()), tracks(scene.lights.size()) {
-    p0 = tile(rIn, surface);
-    p1 = tile(rOut, surface);
+    p0 = tile(rIn, prim);
+    p1 = tile(rOut, prim);
     const Vec3 delta = p1 - p0;
     length = delta.norm();
     if (!(length > 0) || !std::isfinite(length)) {
@@ -60,7 +60,7 @@ SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const
     dir = delta / length;
     // Light directions go to reference space through the inverse Jacobian of the tiled map,
     // taken once per span (the mild-deformation assumption again).
-    jtInv = tiledJacobian(prim.cell, 0.5 * (rIn + rOut), surface).inverse();
+    jtInv = tiledJacobian(prim, 0.5 * (rIn + rOut)).inverse();
     if (!jtInv.allFinite()) jtInv = Mat3::Identity();
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
         Light& sl = lights[i];
@@ -113,8 +113,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
             const double sm = s + 0.5 * ds;
             // The voxel's cell coordinates and world point: for point lights and shadow queries.
             const auto cellPoint = [&] {
-                const Vec3 pt = span.p0 + sm * span.dir;
-                return Vec3(pt.x() / span.surface.repeatU, pt.y() / span.surface.repeatV, pt.z());
+                return span.prim.map.toCell(span.p0 + sm * span.dir);
             };
             Vec3 x = Vec3::Zero();
             bool haveX = false;

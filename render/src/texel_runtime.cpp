@@ -47,12 +47,11 @@ FaithfulLevels faithfulLevels(const octree::Octree& tree, const octree::ChordVis
 
 std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options) {
     std::vector<TexelRuntime> texels(scene.texels.size());
-    for (const SurfaceDef& s : scene.surfaces) {
-        if (!s.texel) continue;
-        TexelRuntime& t = texels[*s.texel];
+    for (const std::size_t index : usedTexels(scene)) {
+        TexelRuntime& t = texels.at(index);
         if (t.volume) continue;
-        const TexelDef& def = scene.texels[*s.texel];
-        auto tree = loadTexelVolume(scene, *s.texel);
+        const TexelDef& def = scene.texels[index];
+        auto tree = loadTexelVolume(scene, index);
         tree->loadLevels(0);
         if (tree->levels.empty() || tree->levels[0].empty())
             throw InputError(def.volume, "octree has no root");
@@ -61,7 +60,7 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
         // With a source, the levels the volume is faithful at are measured (one pass of chords):
         // shadows keep to them, and the hybrid traces the mesh past the finest of them.
         if (def.sourceData || !def.source.empty()) {
-            t.sourceMesh = loadTexelSource(scene, *s.texel);
+            t.sourceMesh = loadTexelSource(scene, index);
             auto source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
             const octree::ChordVisibility visible = [&](const Vec3& a, const Vec3& b) { return !source->occluded(a, b, 0); };
             const FaithfulLevels faithful = faithfulLevels(*tree, visible, def.tau, options.hybridTolerance);

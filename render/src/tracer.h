@@ -2,6 +2,7 @@
 // double precision behind Embree's float BVH). Embree types stay in tracer.cpp.
 #pragma once
 
+#include <vtex/render/cell_map.h>
 #include <vtex/render/geometry.h>
 
 #include <array>
@@ -18,6 +19,7 @@ struct Prim {
     std::array<Vec3, 4> p;  ///< corners p00, p10, p01, p11 (world)
     std::array<Vec3, 4> n;  ///< unit shading normals at the corners
     TrilinearCell cell;     ///< textured faces only
+    CellMap map;            ///< textured faces: cell → tiled reference coordinates (cell_map.h)
 };
 
 struct Hit {

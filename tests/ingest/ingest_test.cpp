@@ -139,6 +139,31 @@ TEST(Ingest, GltfIsTurnedFromYUpToZUp) {
     EXPECT_FLOAT_EQ(obj.boundsMax.x(), 0.0f);
 }
 
+// A real glTF of known up axis (issue 16): Khronos' ClearCoatTest, in Debian's
+// assimp-testmodels, is a board of labelled spheres standing upright, facing the glTF viewer:
+// tall along glTF's +Y, thin along +Z. Ingested, it stands along vtex's +Z, its face toward −y;
+// read as it is (--up z), it would lie on its back.
+TEST(Ingest, RealGltfModelStandsAlongZ) {
+    const fs::path model = "/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf";
+    if (!fs::exists(model)) GTEST_SKIP() << "assimp-testmodels not installed";
+    IngestReport turned, asIs;
+    loadMesh(model, {}, &turned);
+    IngestOptions noTurn;
+    noTurn.up = 'z';
+    loadMesh(model, noTurn, &asIs);
+    const Eigen::Vector3f standing = turned.boundsMax - turned.boundsMin, lying = asIs.boundsMax - asIs.boundsMin;
+    std::cout << "ClearCoatTest extent: " << standing.transpose() << " (turned), " << lying.transpose() << " (as is)\n";
+    EXPECT_EQ(turned.up, 'y');
+    // The board is thin across its face and tall: after the turn the thin axis is y, and its
+    // height is along z.
+    EXPECT_LT(standing.y(), 0.5f * standing.z());
+    EXPECT_LT(standing.y(), 0.5f * standing.x());
+    EXPECT_GT(lying.y(), 2.0f * lying.z());  // as is, it lies on its back
+    // The turn is (x, y, z) → (x, −z, y): the height is the file's y extent.
+    EXPECT_NEAR(standing.z(), lying.y(), 1e-4f * lying.y());
+    EXPECT_NEAR(turned.boundsMin.y(), -asIs.boundsMax.z(), 1e-4f * lying.maxCoeff());
+}
+
 // --fit cell: the largest side of the bounding box becomes 1, centred in x and y, base at z = 0,
 // the same factor on every axis; recorded in the report.
 TEST(Ingest, FitCellScalesUniformlyIntoTheUnitCube) {
@@ -523,7 +548,8 @@ TEST(BaseMesh, QuadsStayQuadsTrianglesCollapse) {
 
 // A quad grid exported triangulated (as Blender writes it with "Triangulate Faces") comes back
 // as its quads (issue 16): each pair of triangles on a quad's diagonal is one cell again, starting
-// at its lowest vertex, wound counter-clockwise; triangles that were not a quad stay triangles.
+// at the quad's own first corner, wound counter-clockwise; triangles that were not a quad stay
+// triangles.
 TEST(BaseMesh, ATriangulatedGridComesBackAsItsQuads) {
     constexpr int n = 4;
     std::string obj;
@@ -554,7 +580,7 @@ TEST(BaseMesh, ATriangulatedGridComesBackAsItsQuads) {
         for (int i = 0; i < n; ++i)
             expected.insert(canonical({std::pair(float(i), float(j)), std::pair(float(i + 1), float(j)),
                                        std::pair(float(i + 1), float(j + 1)), std::pair(float(i), float(j + 1))}));
-    int triangles = 0, fanCells = 0;
+    int triangles = 0, lowerLeftCells = 0;
     for (std::size_t f = 0; f < q.quads.size(); ++f) {
         if (q.isTriangle(f)) {
             ++triangles;
@@ -563,17 +589,52 @@ TEST(BaseMesh, ATriangulatedGridComesBackAsItsQuads) {
         Corners c;
         for (int k = 0; k < 4; ++k) c[std::size_t(k)] = {q.positions[q.quads[f][std::size_t(k)]].x(), q.positions[q.quads[f][std::size_t(k)]].y()};
         quads.insert(canonical(c));
-        // A fan pair keeps the quad's own first corner, its lower left here; another pair starts
-        // at its lowest vertex index.
+        // Every pair, a fan or cut along the other diagonal, starts at the quad's own first
+        // corner: its lower left here.
         const auto& first = q.positions[q.quads[f][0]];
         const bool lowerLeft = first.x() == std::min({c[0].first, c[1].first, c[2].first, c[3].first}) &&
                                first.y() == std::min({c[0].second, c[1].second, c[2].second, c[3].second});
-        EXPECT_TRUE(lowerLeft || q.quads[f][0] == *std::min_element(q.quads[f].begin(), q.quads[f].end())) << f;
-        fanCells += lowerLeft;
+        EXPECT_TRUE(lowerLeft) << f;
+        lowerLeftCells += lowerLeft;
     }
     EXPECT_EQ(quads, expected);
-    EXPECT_GE(fanCells, n * n / 2);  // the odd cells, written as fans, at least
+    EXPECT_EQ(lowerLeftCells, n * n);
     EXPECT_EQ(triangles, 1);
+}
+
+// Base faces keep their material and group names (a scene's `texels` maps them to texels,
+// issue 16): OBJ `usemtl` (with or without a material library) and `g`, glTF material and mesh
+// names. Two triangles of different materials are never merged into one quad, even where they
+// would make a perfect one.
+TEST(BaseMesh, FacesKeepTheirMaterialAndGroupNames) {
+    test::writeBytes(tmp("named.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+                                       "g left\nusemtl grass\nf 1 2 3\nf 1 3 4\ng right\nf 2 5 6\nusemtl bush\nf 2 6 3\n");
+    const QuadMesh q = loadBaseMesh(tmp("named.obj"));
+    ASSERT_EQ(q.quads.size(), 3u);  // the left pair merged; the right pair is of two materials
+    ASSERT_EQ(q.faceNames.size(), 3u);
+    std::multiset<std::pair<std::string, std::string>> faces;
+    for (std::size_t f = 0; f < q.quads.size(); ++f)
+        faces.insert({q.names.at(q.faceNames[f][0]), q.names.at(q.faceNames[f][1])});
+    EXPECT_EQ(faces, (std::multiset<std::pair<std::string, std::string>>{{"grass", "left"}, {"grass", "right"}, {"bush", "right"}}));
+    EXPECT_FALSE(q.isTriangle(0));
+
+    GltfBuilder b;
+    const int pos = b.positions({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0});
+    const int idx = b.indices({0, 1, 2, 0, 2, 3});
+    b.doc["materials"] = {{{"name", "moss"}}};
+    b.meshNode({{"attributes", {{"POSITION", pos}}}, {"indices", idx}, {"material", 0}});
+    b.doc["meshes"][0]["name"] = "roof";
+    test::writeBytes(tmp("named.gltf"), b.gltfEmbedded());
+    const QuadMesh g = loadBaseMesh(tmp("named.gltf"));
+    ASSERT_EQ(g.quads.size(), 1u);
+    ASSERT_EQ(g.faceNames.size(), 1u);
+    EXPECT_EQ(g.names.at(g.faceNames[0][0]), "moss");
+    EXPECT_EQ(g.names.at(g.faceNames[0][1]), "roof");
+    // A file that names nothing leaves the table empty.
+    test::writeBytes(tmp("unnamed.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+    const QuadMesh u = loadBaseMesh(tmp("unnamed.obj"));
+    EXPECT_TRUE(u.faceNames.empty());
+    EXPECT_TRUE(u.names.empty());
 }
 
 }  // namespace

@@ -63,7 +63,8 @@ INSTANTIATE_TEST_SUITE_P(Shipped, Examples,
                          ::testing::Values(Example{"forest-hill", "forest", 0.018, 0.89},
                                            Example{"grass-field", "grass", 0.020, 0.86},
                                            Example{"fur-torus", "fur", 0.036, 0.80},
-                                           Example{"spiders", "spiders", 0.032, 0.89}),
+                                           Example{"spiders", "spiders", 0.032, 0.89},
+                                           Example{"garden", "garden", 0.018, 0.90}),
                          [](const auto& info) {
                              std::string name = info.param.folder;
                              for (char& c : name)

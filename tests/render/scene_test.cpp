@@ -151,3 +151,50 @@ TEST(Scene, AWarningIsOneLineWhateverTheKeyHolds) {
     ASSERT_EQ(s.warnings.size(), 1u);
     EXPECT_EQ(s.warnings[0], "/scenes/s.toml: unknown key 'camera.a b' ignored");
 }
+
+// A texel per face, the sub-rectangle and the perturbation (issue 16): their keys parse into the
+// surface, entries default to the surface's placing, and a bad value names its key.
+TEST(Scene, PerFaceTexelsSubrectAndPerturbation) {
+    const std::string keys = "repeat    = [2, 3]\n"
+                             "texels = { bush = \"grass\", moss = { texel = \"grass\", height = 0.5, subrect = [0, 0, 0.5, 0.5] } }\n"
+                             "perturb = { seed = 7, rotate = true, shift = true }";
+    const Scene s = parseScene(replace(kGood, "repeat    = [2, 3]", keys), "/scenes/s.toml");
+    const SurfaceDef& d = s.surfaces[0];
+    ASSERT_EQ(d.texels.size(), 2u);
+    EXPECT_EQ(d.texels[0].name, "bush");
+    EXPECT_EQ(d.texels[0].placing.texel, 0u);
+    EXPECT_DOUBLE_EQ(d.texels[0].placing.height, 0.2);  // the surface's
+    EXPECT_EQ(d.texels[0].placing.placement, Placement::Under);
+    EXPECT_EQ(d.texels[0].placing.repeat, (std::array<double, 2>{2, 3}));
+    EXPECT_DOUBLE_EQ(d.texels[1].placing.height, 0.5);
+    ASSERT_TRUE(d.texels[1].placing.subrect.has_value());
+    EXPECT_EQ(*d.texels[1].placing.subrect, (std::array<double, 4>{0, 0, 0.5, 0.5}));
+    EXPECT_EQ(d.perturb.seed, 7u);
+    EXPECT_TRUE(d.perturb.rotate);
+    EXPECT_FALSE(d.perturb.mirror);
+    EXPECT_TRUE(d.perturb.shift);
+    EXPECT_EQ(d.placingCount(), 3u);
+    EXPECT_EQ(d.texels[0].placing.perturb.seed, 7u);  // entries take the surface's perturbation
+    EXPECT_TRUE(d.texels[0].placing.perturb.shift);
+    // An entry's own perturbation replaces it (a cyclic texel's faces shifted, another's not).
+    const Scene own = parseScene(replace(kGood, "repeat    = [2, 3]",
+                                         "perturb = { seed = 3, shift = true }\n"
+                                         "texels = { bush = { texel = \"grass\", perturb = { seed = 5, rotate = true } } }"),
+                                 "/scenes/s.toml");
+    EXPECT_EQ(own.surfaces[0].texels[0].placing.perturb.seed, 5u);
+    EXPECT_TRUE(own.surfaces[0].texels[0].placing.perturb.rotate);
+    EXPECT_FALSE(own.surfaces[0].texels[0].placing.perturb.shift);
+    EXPECT_TRUE(own.surfaces[0].placing(0).perturb.shift);
+
+    const auto withKeys = [&](const std::string& k) { return errorOf(replace(kGood, "repeat    = [2, 3]", k)); };
+    EXPECT_EQ(withKeys("texels = { bush = \"hedge\" }"), "/scenes/s.toml: surface[0].texels.bush: no [[texel]] is named 'hedge'");
+    EXPECT_NE(withKeys("texels = { bush = 3 }").find("surface[0].texels.bush: must be a texel name"), std::string::npos);
+    EXPECT_NE(withKeys("texels = { bush = { height = 1 } }").find("surface[0].texels.bush.texel: missing key"), std::string::npos);
+    EXPECT_NE(withKeys("texels = { bush = { texel = \"grass\", placement = \"over\" } }").find("surface[0].texels.bush.placement"),
+              std::string::npos);
+    EXPECT_NE(withKeys("repeat = [2, 3]\nsubrect = [0, 0, 1, 1]").find("surface[0].subrect: give repeat or subrect, not both"),
+              std::string::npos);
+    EXPECT_NE(withKeys("subrect = [0.5, 0, 0.25, 1]").find("surface[0].subrect: must be [x0, y0, x1, y1]"), std::string::npos);
+    EXPECT_NE(withKeys("perturb = { seed = -1 }").find("surface[0].perturb.seed"), std::string::npos);
+    EXPECT_NE(withKeys("perturb = { rotate = 1 }").find("surface[0].perturb.rotate: must be true or false"), std::string::npos);
+}

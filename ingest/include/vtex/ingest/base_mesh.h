@@ -4,7 +4,8 @@
 /// Each face is a bilinear patch P(u,v) = bilerp(P00, P10, P11, P01) given by four corners in
 /// counter-clockwise order; a triangle is a collapsed quad whose last corner repeats its third
 /// (quad[3] == quad[2]). Two triangles that were one quad of a triangulated export (consecutive
-/// as a fan, or sharing their longest edge; within 40° of planar and convex) are that quad again.
+/// as a fan, or sharing their longest edge; within 40° of planar and convex; of the same material
+/// and group) are that quad again.
 /// Polygons with more than four corners are split into quads and a triangle by a fan from their
 /// first corner. World (scene) units.
 #pragma once
@@ -16,6 +17,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace vtex::ingest {
@@ -25,6 +27,13 @@ struct QuadMesh {
     std::vector<Eigen::Vector3f> normals;  ///< unit, one per position (area-weighted or the file's)
     std::vector<Eigen::Vector2f> uvs;      ///< empty, or one per position
     std::vector<std::array<std::uint32_t, 4>> quads;
+    /// The names faces go by, which a scene's `texels` gives them their texel by (docs/render.md,
+    /// "A texel per face"): per face (or empty, when the file names none) the index into `names`
+    /// of its material (OBJ `usemtl`, glTF material name) and of its group (OBJ `g`, glTF mesh
+    /// name), kNoName for none.
+    static constexpr std::uint32_t kNoName = 0xffffffffu;
+    std::vector<std::string> names;
+    std::vector<std::array<std::uint32_t, 2>> faceNames;
 
     /// True when the face is a triangle stored as a collapsed quad.
     bool isTriangle(std::size_t face) const { return quads[face][3] == quads[face][2]; }

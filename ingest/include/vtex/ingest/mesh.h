@@ -45,6 +45,8 @@ struct Material {
     Eigen::Vector4f baseColorFactor{1.0f, 1.0f, 1.0f, 1.0f};
     /// Index into TriangleMesh::textures, or -1 for none; sampled at the vertex UVs.
     int baseColorTexture = -1;
+    /// The file's name for it (OBJ `usemtl`/`newmtl`, glTF `materials[i].name`); may be empty.
+    std::string name;
 };
 
 struct TriangleMesh {

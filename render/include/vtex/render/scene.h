@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -70,15 +71,58 @@ struct TexelDef {
 
 enum class Placement { On, Under };
 
-struct SurfaceDef {
-    std::filesystem::path mesh;    ///< base quad mesh (resolved against the scene file)
-    std::optional<std::size_t> texel;  ///< index into Scene::texels; none for a plain surface
-    double height = 0.1;           ///< shell height H, world units
+/// The paper's "agrandir, déplacer ou faire tourner le volume de référence pour chaque texel"
+/// (§3), to break the repetition: per face, drawn from `seed` and the face, a quarter turn of
+/// the reference volume about its vertical axis, a mirror in x or y, and a shift in x and y
+/// (cyclic texels only). See cell_map.h.
+struct Perturbation {
+    std::uint64_t seed = 0;
+    bool rotate = false, mirror = false, shift = false;
+    bool any() const { return rotate || mirror || shift; }
+};
+
+/// How a texel covers a face (DESIGN.md, "Base mesh and mapping"; paper §3: "pour chaque face
+/// bilinéaire, un pointeur de texel indique quel motif utiliser ; on indique également si le
+/// texel doit être posé sur ou sous la face"): which texel, the shell height, on or under the
+/// face, and the part of the reference volume it shows.
+struct TexelPlacing {
+    std::optional<std::size_t> texel;  ///< index into Scene::texels; none: a plain face
+    double height = 0.1;               ///< shell height H, world units
     Placement placement = Placement::On;
     std::array<double, 2> repeat{1, 1};  ///< copies of the reference volume along u and v
+    /// The rectangle [x0, y0, x1, y1] of (tiled) reference space a face shows, instead of
+    /// [0, 0, repeat]; beyond the unit square only for a cyclic texel.
+    std::optional<std::array<double, 4>> subrect;
+    Perturbation perturb;  ///< off by default
+};
+
+/// A surface's faces of one material or group (`[[surface]] texels = { name = … }`).
+struct NamedPlacing {
+    std::string name;
+    TexelPlacing placing;
+};
+
+struct SurfaceDef {
+    std::filesystem::path mesh;    ///< base quad mesh (resolved against the scene file)
+    /// The faces that `texels` does not name (all faces without it): texel (none for plain faces),
+    /// height, placement, repeat or sub-rectangle.
+    std::optional<std::size_t> texel;
+    double height = 0.1;
+    Placement placement = Placement::On;
+    std::array<double, 2> repeat{1, 1};
+    std::optional<std::array<double, 4>> subrect;
+    /// Per face material or group name (ingest::QuadMesh::faceNames; a material's name first).
+    std::vector<NamedPlacing> texels;
+    Perturbation perturb;  ///< the faces `texels` does not name; the entries' default
     Material material;
     /// The mesh, when the caller provides it in memory (tests); otherwise read from `mesh`.
     std::shared_ptr<const ingest::QuadMesh> meshData;
+
+    /// Placing k: 0 the surface's own (texel, height, …), k ≥ 1 that of texels[k − 1].
+    TexelPlacing placing(std::size_t k) const {
+        return k == 0 ? TexelPlacing{texel, height, placement, repeat, subrect, perturb} : texels.at(k - 1).placing;
+    }
+    std::size_t placingCount() const { return texels.size() + 1; }
 };
 
 struct Scene {
@@ -103,6 +147,20 @@ Scene loadScene(const std::filesystem::path& file);
 std::shared_ptr<const ingest::QuadMesh> loadSurfaceMesh(const Scene& scene, std::size_t surface);
 std::shared_ptr<const octree::Octree> loadTexelVolume(const Scene& scene, std::size_t texel);
 std::shared_ptr<const ingest::TriangleMesh> loadTexelSource(const Scene& scene, std::size_t texel);
+
+/// Per face of `mesh` (surface `surface`'s base mesh), the index of its placing
+/// (SurfaceDef::placing): the `texels` entry named by the face's material, else by its group,
+/// else 0. Throws vtex::InputError naming the scene file and the key of an entry that names no
+/// face of the mesh (a misspelt material would otherwise leave its faces plain, silently).
+std::vector<std::uint32_t> facePlacings(const Scene& scene, std::size_t surface, const ingest::QuadMesh& mesh);
+
+/// The texels some surface places (on its own faces or through `texels`), each once, in
+/// increasing index.
+std::vector<std::size_t> usedTexels(const Scene& scene);
+
+/// Whether texel `texel`'s volume is cyclic (tileable in x and y; octree::VolumeInfo::cyclic),
+/// read from its header (or the octree given in memory).
+bool texelIsCyclic(const Scene& scene, std::size_t texel);
 
 /// Every file a render of `scene` may read: the scene file, each surface's mesh, each texel's
 /// volume and source (empty paths left out). What a command checks its outputs against.
