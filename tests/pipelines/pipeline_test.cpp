@@ -313,8 +313,13 @@ TEST(Pipeline, ReferenceRendersPutTexelRendersOnAnErrorAgainstTimeTable) {
         EXPECT_NEAR(speedup["value"].get<double>() * texelSeconds, rows["reference-1"]["seconds"].get<double>(), 1e-9);
     }
     const std::string html = vtex::test::readText(dir / "out/report.html");
-    EXPECT_NE(html.find("Error against run time"), std::string::npos);
-    EXPECT_NE(html.find("<svg"), std::string::npos);
+    // One study (three renders against the truth) with its plot; the texel-against-texel
+    // comparison is a difference, not a study or a figure.
+    EXPECT_NE(html.find("Studies: error against run time"), std::string::npos);
+    EXPECT_NE(html.find("<h3>Against truth</h3>"), std::string::npos);
+    EXPECT_NE(html.find("<svg class=\"plot\""), std::string::npos);
+    EXPECT_NE(html.find("Difference from cross-hill"), std::string::npos);
+    EXPECT_EQ(html.find("Against cross-hill"), std::string::npos);
     const auto statsTruth = nlohmann::json::parse(vtex::test::readText(dir / "out/renders/truth.stats.json"));
     EXPECT_EQ(statsTruth["renderer"], "reference-embedded");
     EXPECT_EQ(statsTruth["spp"], 64);
