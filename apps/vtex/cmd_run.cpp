@@ -45,8 +45,8 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
     addThreadsOption(app, o->threads);
     app.add_flag("--wait", o->wait, "When another run holds the output folder, wait until it ends (default: refuse)");
     app.add_flag("--dry-run", o->dryRun,
-                 "List the stages that would run and why (changed input, changed parameter, missing output); run and "
-                 "write nothing");
+                 "List the stages that would run and why (changed input, changed parameter, missing output); run "
+                 "nothing, leave every file as it is");
     app.add_flag("--strict", o->strict, "Refuse a pipeline file with an unknown key (exit 2) instead of warning");
     return [o](const GlobalOptions& global) {
         const ThreadLimit threadLimit(o->threads);
