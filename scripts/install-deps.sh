@@ -13,6 +13,9 @@ packages=(
   # installed here so that every build has it and its tests run. Its Find-module fails without
   # Boost.Iostreams, which Debian's libopenvdb-dev does not depend on.
   libopenvdb-dev libboost-iostreams-dev
+  # Headless Chromium, for the test that loads report.html (links resolve, nothing overflows,
+  # a screenshot of its first screen): the test fails without it, so every build has it.
+  chromium
 )
 # Extra packages a caller asks for (the tests want Debian's sample models).
 packages+=("$@")

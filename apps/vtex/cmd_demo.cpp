@@ -1,5 +1,6 @@
 // `vtex demo [-o DIR]`: the built-in showcase (vtex::pipelines::runDemo).
 #include "cli.h"
+#include "run_progress.h"
 
 #include <vtex/pipelines/demo.h>
 
@@ -32,8 +33,14 @@ const bool registered = registerCommand(90, [](CLI::App& app) -> Action {
     addThreadsOption(app, *threads);
     return [options, threads](const GlobalOptions& global) {
         const ThreadLimit threadLimit(*threads);
-        options->run.log = [&global](const std::string& line) { status(global, line); };
-        const pipelines::RunReport report = pipelines::runDemo(*options);
+        pipelines::RunReport report;
+        {
+            RunProgressDisplay display(global, options->run.jobs);  // gone before the summary is printed
+            options->run.log = display.logger();
+            if (display.enabled()) options->run.observer = &display;
+            report = pipelines::runDemo(*options);
+            options->run.observer = nullptr;
+        }
         std::cout << pipelines::formatDemoReport(report);
         if (!report.succeeded()) throw std::runtime_error("some stages of the demo failed (see above)");
     };

@@ -1,5 +1,7 @@
-// `vtex run pipeline.toml [-o DIR] [--force] [--jobs N]`: a staged batch run with caching.
+// `vtex run pipeline.toml [-o DIR] [--force] [--jobs N] [--dry-run] [--strict]`: a staged batch
+// run with caching, its progress drawn on a terminal (run_progress.h).
 #include "cli.h"
+#include "run_progress.h"
 
 #include <vtex/core/error.h>
 #include <vtex/pipelines/pipeline.h>
@@ -8,6 +10,17 @@
 
 namespace vtex::cli {
 namespace {
+
+// `--dry-run`'s answer, on stdout: one line per stage, then the count.
+void printPlan(const std::vector<pipelines::PlannedStage>& plan) {
+    std::size_t runs = 0;
+    for (const pipelines::PlannedStage& p : plan) {
+        runs += p.runs;
+        std::cout << (p.runs ? "would run " : "cached    ") << p.kind << " " << p.name << (p.runs ? ": " + p.reason : "")
+                  << "\n";
+    }
+    std::cout << runs << " of " << plan.size() << " stages would run; nothing was run or written (--dry-run)\n";
+}
 
 const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
     app.name("run");
@@ -20,6 +33,8 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         std::uint64_t maxMemory = 0;
         int threads = 0;
         bool wait = false;
+        bool dryRun = false;
+        bool strict = false;
     };
     auto o = std::make_shared<Options>();
     app.add_option("PIPELINE", o->file, "The pipeline file (.toml)")->required();
@@ -29,9 +44,18 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
     addMaxMemoryOption(app, o->maxMemory, "a stage, together with those running beside it,");
     addThreadsOption(app, o->threads);
     app.add_flag("--wait", o->wait, "When another run holds the output folder, wait until it ends (default: refuse)");
+    app.add_flag("--dry-run", o->dryRun,
+                 "List the stages that would run and why (changed input, changed parameter, missing output); run "
+                 "nothing, leave every file as it is");
+    app.add_flag("--strict", o->strict, "Refuse a pipeline file with an unknown key (exit 2) instead of warning");
     return [o](const GlobalOptions& global) {
         const ThreadLimit threadLimit(o->threads);
         const pipelines::Pipeline pipeline = pipelines::loadPipeline(o->file);
+        if (o->strict && !pipeline.unknownKeys.empty())
+            throw CLI::ValidationError("--strict", o->file + ": unknown key '" + pipeline.unknownKeys.front() + "'" +
+                                                       (pipeline.unknownKeys.size() > 1
+                                                            ? " (and " + std::to_string(pipeline.unknownKeys.size() - 1) + " more)"
+                                                            : std::string()));
         for (const auto& w : pipeline.warnings) warning(global, w);
         pipelines::RunOptions options;
         options.output = o->output;
@@ -39,8 +63,14 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         options.jobs = o->jobs;
         options.maxMemoryBytes = o->maxMemory;
         options.waitForLock = o->wait;
-        options.log = [&global](const std::string& line) { status(global, line); };
-        const pipelines::RunReport report = pipelines::runPipeline(pipeline, options);
+        if (o->dryRun) return printPlan(pipelines::planPipeline(pipeline, options));
+        pipelines::RunReport report;
+        {
+            RunProgressDisplay display(global, o->jobs);  // gone before the closing lines are printed
+            options.log = display.logger();
+            if (display.enabled()) options.observer = &display;
+            report = pipelines::runPipeline(pipeline, options);
+        }
         for (const auto& omission : report.leftOut) status(global, "left out: texel " + omission.texel + ": " + omission.reason);
         status(global, "report: " + report.reportHtml.string());
         if (!report.succeeded()) {

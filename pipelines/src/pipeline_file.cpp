@@ -78,6 +78,7 @@ Pipeline loadPipeline(const fs::path& file) {
     Pipeline pipeline;
     pipeline.file = file;
     TomlReader reader(file, pipeline.warnings);
+    reader.collectUnknownKeys(pipeline.unknownKeys);
     const toml::table root = reader.parse(text);
     reader.checkKeys(root, "", {"pipeline", "source", "texel", "render", "compare"});
 

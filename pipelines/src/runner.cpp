@@ -1,39 +1,27 @@
-// Runs a Pipeline: stages in waves (sources, samples, builds, renders, compares), the stages of a
-// wave in parallel, each skipped when its manifest says its outputs are up to date.
+// Runs a Pipeline's stage graph (stage_graph.h): stages in waves (sources, samples, builds,
+// renders, compares), the stages of a wave in parallel, each skipped when its manifest says its
+// outputs are up to date; or, for a dry run, only tells which would run and why.
 #include <vtex/pipelines/pipeline.h>
+#include <vtex/pipelines/run_observer.h>
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 #include <vtex/core/folder_lock.h>
 #include <vtex/core/memory_budget.h>
 #include <vtex/core/version.h>
-#include <vtex/ingest/ingest.h>
-#include <vtex/octree/octree.h>
-#include <vtex/octree/volume.h>
-#include <vtex/render/compare.h>
-#include <vtex/render/level_bound.h>
-#include <vtex/render/reference.h>
-#include <vtex/render/renderer.h>
-#include <vtex/render/scene.h>
-#include <vtex/render/source_visibility.h>
-#include <vtex/sampler/patterns.h>
-#include <vtex/sampler/sampler.h>
 
 #include "content_hash.h"
 #include "memory_monitor.h"
-#include "partial_sample.h"
 #include "report.h"
+#include "stage_graph.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include <bit>
 #include <chrono>
 #include <fstream>
-#include <map>
 #include <mutex>
-#include <set>
 #include <sstream>
 
 namespace vtex::pipelines {
@@ -42,100 +30,174 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
 using Status = StageRecord::Status;
+using detail::Stage;
 
-// What one stage needs to run and what it made.
-struct Stage {
-    Stage(std::string stageKind, std::string stageName) : kind(std::move(stageKind)), name(std::move(stageName)) {}
-
-    std::string kind, name;
-    std::vector<std::size_t> inputs;               // indices of the stages it reads
-    std::function<std::string()> describe;         // canonical text of parameters and inputs
-    std::function<Json(Stage&)> run;               // writes the outputs, returns details
-    std::map<std::string, fs::path> outputs;       // role → path
-    // Filled while running:
-    StageRecord record;
-    std::map<std::string, std::string> outputHashes;  // role → content hash
-};
-
-fs::path manifestPath(const Stage& stage, const fs::path& root) {
-    return root / (stage.kind + "s") / (stage.name + ".manifest.json");
+std::vector<std::string> lines(const std::string& text) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) out.push_back(line);
+    return out;
 }
 
-// Two stages that would write one file (a compare `c` and one named `c.manifest` both wrote
-// compares/c.manifest.json, and the cache never settled): refused before anything runs, naming
-// both stages and the file.
-void refuseSharedOutputs(const std::vector<Stage>& stages, const fs::path& root, const fs::path& pipelineFile) {
-    std::map<fs::path, std::string> writer;
-    for (const Stage& stage : stages) {
-        std::vector<fs::path> files{manifestPath(stage, root)};
-        for (const auto& [role, file] : stage.outputs) files.push_back(file);
-        for (const fs::path& file : files) {
-            const std::string who = stage.kind + " '" + stage.name + "'";
-            const auto [it, fresh] = writer.emplace(file.lexically_normal(), who);
-            if (!fresh && it->second != who)
-                throw InputError(pipelineFile, it->second + " and " + who + " would both write " + file.string());
+std::vector<std::string> words(const std::string& line) {
+    std::vector<std::string> out;
+    std::istringstream in(line);
+    for (std::string word; in >> word;) out.push_back(word);
+    return out;
+}
+
+bool isHash(const std::string& word) {
+    return word.size() == 32 && word.find_first_not_of("0123456789abcdef") == std::string::npos;
+}
+
+// What changed between the description an earlier run recorded and this run's: the first line
+// that differs, and in it the first word. A content hash that changed is an input, named by the
+// word before it ("mesh", "scene", "octree", "file"); another word is a parameter's value, named
+// likewise ("spp 1 → 4").
+std::string describeChange(const std::string& before, const std::string& now) {
+    const std::vector<std::string> a = lines(before), b = lines(now);
+    for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+        if (a[i] == b[i]) continue;
+        if (i == 0) return "made by another vtex (" + a[i] + ")";
+        const std::vector<std::string> x = words(a[i]), y = words(b[i]);
+        for (std::size_t w = 0; w < std::min(x.size(), y.size()); ++w) {
+            if (x[w] == y[w]) continue;
+            // "file <hash> up z": the input is named by the word before its hash.
+            if (isHash(y[w])) return "changed input: " + (w > 0 ? y[w - 1] : std::string("content"));
+            return "changed parameter: " + (w > 0 ? y[w - 1] + " " : "") + x[w] + " → " + y[w];
         }
+        return "changed parameters: " + a[i] + " → " + b[i];
     }
+    return "changed inputs (" + std::to_string(a.size()) + " lines of inputs and parameters, now " +
+           std::to_string(b.size()) + ")";
 }
 
-// True when the manifest's key matches and every output still has the recorded content.
-bool upToDate(Stage& stage, const fs::path& root) {
-    const fs::path manifest = manifestPath(stage, root);
+// Why `stage`, whose key is set, must run: "" when its manifest's key matches and every output
+// still has the recorded content (then its output hashes and details are filled in from it).
+std::string staleReason(Stage& stage, const fs::path& root, const std::string& description) {
+    const fs::path manifest = detail::manifestPath(stage, root);
     std::ifstream in(manifest);
-    if (!in) return false;
-    Json j;
+    if (!in) return "no earlier run";
     try {
-        j = Json::parse(in);
-        if (j.at("key").get<std::string>() != stage.record.key) return false;
+        const Json j = Json::parse(in);
+        if (j.at("key").get<std::string>() != stage.record.key)
+            return j.contains("description") ? describeChange(j["description"].get<std::string>(), description)
+                                             : "changed parameters or inputs";
+        std::map<std::string, std::string> hashes;
         for (const auto& [role, path] : stage.outputs) {
             const std::string recorded = j.at("outputs").at(role).at("hash").get<std::string>();
-            if (!fs::is_regular_file(path) || hashFile(path) != recorded) return false;
-            stage.outputHashes[role] = recorded;
+            const std::string name = path.lexically_relative(root).generic_string();
+            if (!fs::is_regular_file(path)) return "missing output " + name;
+            if (hashFile(path) != recorded) return "output " + name + " changed since it was made";
+            hashes[role] = recorded;
         }
+        stage.outputHashes = hashes;
         stage.record.detailsJson = j.value("details", Json::object()).dump();
     } catch (const std::exception&) {
-        return false;  // unreadable or foreign manifest: redo the stage
+        return "its manifest is unreadable";  // unreadable or foreign: redo the stage
     }
-    return true;
+    return "";
 }
 
-void writeManifest(const Stage& stage, const fs::path& root, const Json& details) {
+// The work time the stage's manifest records, valid or not: what the ETA expects of it.
+double earlierSeconds(const Stage& stage, const fs::path& root) {
+    std::ifstream in(detail::manifestPath(stage, root));
+    if (!in) return -1;
+    try {
+        return Json::parse(in).value("seconds", -1.0);
+    } catch (const std::exception&) {
+        return -1;
+    }
+}
+
+void writeManifest(const Stage& stage, const fs::path& root, const Json& details, const std::string& description) {
     Json outputs = Json::object();
     for (const auto& [role, path] : stage.outputs)
         outputs[role] = {{"file", path.filename().string()}, {"hash", stage.outputHashes.at(role)}};
     const Json manifest = {{"kind", stage.kind},       {"name", stage.name},   {"key", stage.record.key},
                            {"vtex_version", kVersion}, {"outputs", outputs},   {"seconds", stage.record.seconds},
-                           {"details", details}};
-    writeFileAtomically(manifestPath(stage, root), manifest.dump(2) + "\n");
+                           {"details", details},       {"description", description}};
+    writeFileAtomically(detail::manifestPath(stage, root), manifest.dump(2) + "\n");
 }
 
-render::RenderOptions renderOptions(const RenderStep& step) {
-    render::RenderOptions o;
-    o.width = step.width;
-    o.height = step.height;
-    o.spp = step.spp;
-    o.lodBias = step.lodBias;
-    o.hybrid = step.hybrid;
-    o.fitLevels = step.levelFit;
-    if (step.approximations == "exact") o.approximations = render::ApproximationBudget::exact();
-    o.shading = step.shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
-    return o;
+fs::path outputRoot(const Pipeline& pipeline, const RunOptions& options) {
+    return options.output.empty() ? pipeline.output : options.output;
 }
 
-render::ReferenceOptions referenceOptions(const RenderStep& step) {
-    render::ReferenceOptions o;
-    o.width = step.width;
-    o.height = step.height;
-    o.spp = step.spp;
-    o.mode = step.mode == "deformed" ? render::ReferenceMode::Deformed : render::ReferenceMode::Embedded;
-    return o;
+// The plan of a graph nothing has run in yet: wave by wave, a stage whose inputs are all up to
+// date is judged by its manifest, one with an input that runs first runs too.
+std::vector<PlannedStage> plan(std::vector<Stage>& stages, const fs::path& root, bool force) {
+    std::vector<PlannedStage> out;
+    std::size_t wave = 0;
+    for (std::size_t i = 0; i < stages.size(); ++i) {
+        Stage& stage = stages[i];
+        if (i > 0 && stage.kind != stages[i - 1].kind) ++wave;
+        PlannedStage p{stage.kind, stage.name, wave, true, "", earlierSeconds(stage, root)};
+        if (force) p.reason = "forced (--force)";
+        for (std::size_t input : stage.inputs)
+            if (out[input].runs && p.reason.empty()) p.reason = "input " + stages[input].kind + " '" + stages[input].name + "' runs first";
+        if (p.reason.empty()) {
+            try {
+                const std::string description = stage.describe();
+                stage.record.key = hashBytes(description);
+                p.reason = staleReason(stage, root, description);
+                p.runs = !p.reason.empty();
+            } catch (const std::exception& e) {
+                p.reason = std::string("cannot read its inputs: ") + e.what();
+            }
+        }
+        out.push_back(p);
+    }
+    // The plan leaves no trace: the graph is run from scratch.
+    for (Stage& stage : stages) {
+        stage.outputHashes.clear();
+        stage.record = StageRecord{};
+    }
+    return out;
 }
 
-std::string readText(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
+// Forwards a stage's own progress to the run's observer, as the fraction of its current phase.
+class StageProgress final : public Progress {
+public:
+    StageProgress(RunObserver* observer, std::size_t index) : mObserver(observer), mIndex(index) {}
+    void start(std::string_view, std::uint64_t total) override {
+        mTotal = total;
+        mDone = 0;
+        if (mObserver) mObserver->progressed(mIndex, 0);
+    }
+    void advance(std::uint64_t units) override {
+        const std::uint64_t done = mDone.fetch_add(units, std::memory_order_relaxed) + units;
+        if (mObserver && mTotal > 0) mObserver->progressed(mIndex, std::min(1.0, double(done) / double(mTotal)));
+    }
+    void finish() override {}
+
+private:
+    RunObserver* mObserver;
+    std::size_t mIndex;
+    std::uint64_t mTotal = 0;
+    std::atomic<std::uint64_t> mDone{0};
+};
+
+// The output folders, once the pipeline is accepted whole: a refused one (exit 3) left an empty
+// output directory tree behind (found by fuzz_cli.py).
+void createFolder(const fs::path& folder) {
+    std::error_code error;
+    fs::create_directories(folder, error);
+    if (error) throw IoError(folder, "cannot create the output directory: " + error.message());
+}
+
+// With the folder's lock held: the stages' folders, cleared of a killed run's temporaries.
+void prepareFolders(const fs::path& root) {
+    for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
+        createFolder(root / folder);
+        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; holding the
+        // folder's lock, this run knows no other run writes them, so they can go.
+        std::error_code error;
+        for (const auto& entry : fs::directory_iterator(root / folder, error)) {
+            const std::string file = entry.path().filename().string();
+            if (file.front() == '.' && file.find(".tmp.") != std::string::npos) fs::remove(entry.path(), error);
+        }
+    }
 }
 
 }  // namespace
@@ -156,414 +218,114 @@ bool RunReport::succeeded() const {
     return true;
 }
 
+std::vector<PlannedStage> planPipeline(const Pipeline& pipeline, const RunOptions& options) {
+    const fs::path root = outputRoot(pipeline, options);
+    checkOutputFolder(root, {pipeline.file});
+    MemoryBudget budget(options.maxMemoryBytes);
+    std::vector<Stage> stages;
+    std::vector<Omission> leftOut;
+    detail::buildStageGraph(pipeline, root, options.force, budget, stages, leftOut);
+    return plan(stages, root, options.force);
+}
+
+namespace {
+
+// Runs one stage (its inputs done): skipped after a failed input, cached when up to date, else
+// run, its outputs hashed and its manifest written. Never throws: a failure is its record's.
+void runStage(std::vector<Stage>& stages, std::size_t i, const fs::path& root, const RunOptions& options,
+              MemoryMonitor& memory, const std::function<void(const std::string&)>& log) {
+    Stage& stage = stages[i];
+    stage.record.kind = stage.kind;
+    stage.record.name = stage.name;
+    for (const auto& [role, path] : stage.outputs) stage.record.outputs.push_back(path);
+    for (std::size_t input : stage.inputs) {
+        const Status upstream = stages[input].record.status;
+        if (upstream == Status::Failed || upstream == Status::Skipped) {
+            stage.record.status = Status::Skipped;
+            stage.record.message = "not run: " + stages[input].kind + " '" + stages[input].name + "' " + statusName(upstream);
+            log("skipped " + stage.kind + " " + stage.name + " (" + stage.record.message + ")");
+            return;
+        }
+    }
+    try {
+        const std::string description = stage.describe();
+        stage.record.key = hashBytes(description);
+        const std::string why = options.force ? "forced (--force)" : staleReason(stage, root, description);
+        if (why.empty()) {
+            stage.record.status = Status::Cached;
+            log("cached  " + stage.kind + " " + stage.name);
+            return;
+        }
+        log("run     " + stage.kind + " " + stage.name + " (" + why + ")");
+        if (options.observer) options.observer->started(i);
+        StageProgress progress(options.observer, i);
+        stage.progress = &progress;
+        const auto t = std::chrono::steady_clock::now();
+        const std::uint64_t watch = memory.start();
+        Json details;
+        try {
+            details = stage.run(stage);
+        } catch (...) {
+            memory.stop(watch);
+            throw;
+        }
+        stage.record.peakMemoryBytes = memory.stop(watch);
+        stage.record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+        for (const auto& [role, path] : stage.outputs) stage.outputHashes[role] = hashFile(path);
+        writeManifest(stage, root, details, description);
+        stage.record.detailsJson = details.dump();
+        stage.record.status = Status::Ran;
+        char took[64];
+        std::snprintf(took, sizeof took, " in %.2f s, peak %s", stage.record.seconds,
+                      formatBytes(stage.record.peakMemoryBytes).c_str());
+        log("ran     " + stage.kind + " " + stage.name + took);
+    } catch (const std::exception& e) {
+        stage.record.status = Status::Failed;
+        stage.record.message = e.what();
+        stage.record.badInput = dynamic_cast<const InputError*>(&e) != nullptr;
+        log("failed  " + stage.kind + " " + stage.name + ": " + e.what());
+    }
+}
+
+}  // namespace
+
 RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     const auto start = std::chrono::steady_clock::now();
-    const fs::path root = options.output.empty() ? pipeline.output : options.output;
+    const fs::path root = outputRoot(pipeline, options);
     // Before anything: `-o` a FIFO, a device, a file or the pipeline itself is bad input.
     checkOutputFolder(root, {pipeline.file});
+    std::mutex logMutex;
     auto log = [&](const std::string& line) {
+        std::lock_guard lock(logMutex);
         if (options.log) options.log(line);
     };
 
     RunReport report;
     report.output = root;
-
-    // Leave out what the renders do not need: each texel is sampled to the finest level any
-    // ray of any render can use (capped by its `resolution`), and texels no render uses are
-    // not built at all.
-    std::map<std::string, std::uint32_t> resolution;
-    for (const TexelStep& step : pipeline.texels) resolution[step.name] = step.resolution;
-    if (pipeline.fitResolution && !pipeline.renders.empty()) {
-        std::map<std::string, std::pair<int, std::string>> need;  // texel → (finest level, render)
-        for (const RenderStep& step : pipeline.renders) {
-            const render::Scene scene = render::loadScene(step.scene);
-            const auto needs = render::finestUsefulLevels(scene, renderOptions(step));
-            for (const auto& [sceneTexel, texel] : step.texels) {
-                const auto& n = needs[sceneTexelIndex(scene, sceneTexel)];
-                if (!n.used) continue;
-                // A reference render reads only where the sampler placed the source (any level).
-                const int level = step.renderer == "reference" ? 0 : n.unbounded ? 63 : n.finestLevel;
-                if (!need.count(texel) || level > need[texel].first) need[texel] = {level, step.name};
-            }
-        }
-        for (const TexelStep& step : pipeline.texels) {
-            const auto found = need.find(step.name);
-            if (found == need.end()) {
-                resolution.erase(step.name);
-                report.leftOut.push_back({step.name, "not built: no surface of any render uses it"});
-                continue;
-            }
-            const int cap = std::countr_zero(step.resolution);
-            const int level = std::min(cap, found->second.first);
-            resolution[step.name] = std::uint32_t(1) << level;
-            if (level < cap)
-                report.leftOut.push_back(
-                    {step.name, "sampled at " + std::to_string(1u << level) + "³ instead of " +
-                                    std::to_string(step.resolution) + "³: the finest level any ray of render '" +
-                                    found->second.second + "' can use is " + std::to_string(found->second.first)});
-        }
-    }
-    auto isBuilt = [&](const std::string& texel) { return resolution.count(texel) > 0; };
-
-    // The stage graph, in waves: every stage's inputs come from an earlier wave.
-    std::vector<Stage> stages;
-    std::map<std::string, std::size_t> sourceIndex, sampleIndex, buildIndex, renderIndex;
-    const std::string header = std::string("vtex ") + kVersion + "\n";
     // One memory limit for the stages that run side by side: each reserves its estimate before
     // its work and waits while the others leave too little (memory_budget.h).
     MemoryBudget budget(options.maxMemoryBytes);
+    std::vector<Stage> stages;
+    detail::buildStageGraph(pipeline, root, options.force, budget, stages, report.leftOut);
 
-    for (const SourceStep& step : pipeline.sources) {
-        Stage s{"source", step.name};
-        s.outputs["mesh"] = root / "sources" / (step.name + ".glb");
-        s.describe = [step, header] {
-            std::ostringstream d;
-            d << header << "source\n";
-            if (!step.pattern.empty())
-                d << "pattern " << step.pattern << " seed " << step.seed << " count " << step.count << " fluctuation "
-                  << step.fluctuation << " lean " << step.leanDegrees << " variant " << step.variant << "\n";
-            else
-                d << "file " << hashFile(step.file) << " up " << (step.up ? step.up : '-') << " fit "
-                  << (step.fitCell ? "cell" : "keep") << "\n";
-            return d.str();
-        };
-        s.run = [step](Stage& self) {
-            ingest::TriangleMesh mesh;
-            if (!step.pattern.empty()) {
-                sampler::PatternOptions o;
-                o.seed = step.seed;
-                o.count = step.count;
-                o.fluctuation = step.fluctuation;
-                o.leanDegrees = step.leanDegrees;
-                o.variant = step.variant;
-                mesh = sampler::makePattern(step.pattern, o);
-            } else {
-                ingest::IngestOptions o;
-                o.up = step.up;
-                o.fitCell = step.fitCell;
-                mesh = ingest::loadMesh(step.file, o);
-            }
-            ingest::writeMeshGlb(mesh, self.outputs.at("mesh"));
-            return Json{{"triangles", mesh.triangles.size()}, {"closed", mesh.closed}};
-        };
-        sourceIndex[step.name] = stages.size();
-        stages.push_back(std::move(s));
-    }
-
-    for (const TexelStep& step : pipeline.texels) {
-        if (!isBuilt(step.name)) continue;
-        const std::uint32_t sampledResolution = resolution.at(step.name);
-        const SourceStep& source = *std::find_if(pipeline.sources.begin(), pipeline.sources.end(),
-                                                 [&](const SourceStep& s) { return s.name == step.source; });
-        const bool cyclic = step.cyclic.value_or(!source.pattern.empty() && sampler::isCyclicPattern(source.pattern));
-        Stage sample{"sample", step.name};
-        sample.inputs = {sourceIndex.at(step.source)};
-        sample.outputs["volume"] = root / "samples" / (step.name + ".vtl");
-        // The mesh the volume was sampled from, for the next run to find what changed.
-        sample.outputs["sampled_mesh"] = root / "samples" / (step.name + ".mesh.glb");
-        sampleIndex[step.name] = stages.size();
-        stages.push_back(std::move(sample));
-        Stage& s = stages.back();
-        const std::size_t sourceStage = s.inputs[0];
-        std::ostringstream parameters;
-        parameters << header << "sample\nresolution " << sampledResolution << " cyclic " << cyclic << " solid " << step.solid
-                   << "\n";
-        s.describe = [&stages, sourceStage, parameters = parameters.str()] {
-            return parameters + "mesh " + stages[sourceStage].outputHashes.at("mesh") + "\n";
-        };
-        const detail::EarlierSample earlier{manifestPath(s, root), s.outputs.at("volume"), s.outputs.at("sampled_mesh"),
-                                            parameters.str()};
-        s.run = [&stages, &budget, step, cyclic, sourceStage, sampledResolution, earlier, force = options.force](Stage& self) {
-            const fs::path meshFile = stages[sourceStage].outputs.at("mesh");
-            const std::string meshBytes = readText(meshFile);
-            const ingest::TriangleMesh mesh = ingest::loadMesh(meshFile);
-            sampler::SampleOptions o;
-            o.resolution = sampledResolution;
-            o.cyclic = cyclic;
-            o.solid = step.solid == "on" ? sampler::SolidMode::On
-                      : step.solid == "off" ? sampler::SolidMode::Off
-                                            : sampler::SolidMode::Auto;
-            const auto held = budget.reserve(meshFile, "sampling at " + std::to_string(sampledResolution) + "^3",
-                                             sampler::estimateSampleMemory(mesh, o));
-            NullProgress quiet;
-            // An edited source is re-sampled only where its triangles changed (not with --force).
-            const detail::SampleResult sampled = force ? detail::SampleResult{sampler::sampleMesh(mesh, o, quiet), std::nullopt, {}}
-                                                       : detail::sampleOrUpdate(mesh, o, earlier, quiet);
-            const octree::SparseVolume& volume = sampled.volume;
-            // Both or neither: a copy of another mesh beside the volume would mislead the next run.
-            AtomicOutputFile vtl(self.outputs.at("volume")), copy(self.outputs.at("sampled_mesh"));
-            vtl.stream() << octree::serializeVtl(volume);
-            copy.stream() << meshBytes;
-            commitAll({&vtl, &copy});
-            Json region = nullptr;
-            if (sampled.region)
-                region = {sampled.region->min[0], sampled.region->min[1], sampled.region->min[2],
-                          sampled.region->max[0], sampled.region->max[1], sampled.region->max[2]};
-            return Json{{"resolution", sampledResolution},
-                        {"maximum_resolution", step.resolution},
-                        {"occupied_blocks", volume.blocks.size()},
-                        {"source_area", volume.info.sourceArea},
-                        {"fit_error_mean", volume.info.fitError.mean},
-                        {"parameters", earlier.parameters},
-                        {"updated_region", region},
-                        {"updated_from", sampled.updatedFrom}};
-        };
-    }
-
-    // All samples form one wave and all builds the next, so that texels run side by side.
-    for (const TexelStep& step : pipeline.texels) {
-        if (!isBuilt(step.name)) continue;
-        Stage build{"build", step.name};
-        build.inputs = {sampleIndex.at(step.name)};
-        build.outputs["octree"] = root / "builds" / (step.name + ".vto");
-        buildIndex[step.name] = stages.size();
-        stages.push_back(std::move(build));
-        Stage& b = stages.back();
-        const std::size_t sampleStage = b.inputs[0];
-        b.describe = [&stages, step, sampleStage, header] {
-            std::ostringstream d;
-            // The source too: the stage measures each level against it (its details).
-            d << header << "build\nfilter " << step.filter << " tolerance " << step.tolerance << "\nvolume "
-              << stages[sampleStage].outputHashes.at("volume") << "\nsource "
-              << stages[stages[sampleStage].inputs[0]].outputHashes.at("mesh") << "\n";
-            return d.str();
-        };
-        std::ostringstream buildParameters;
-        buildParameters << "filter " << step.filter << " tolerance " << step.tolerance;
-        const detail::EarlierBuild earlierBuild{manifestPath(b, root), b.outputs.at("octree"), buildParameters.str()};
-        b.run = [&stages, &budget, step, sampleStage, earlierBuild](Stage& self) {
-            const fs::path sourceFile = stages[stages[sampleStage].inputs[0]].outputs.at("mesh");
-            const fs::path volumeFile = stages[sampleStage].outputs.at("volume");
-            const auto held = budget.reserve(volumeFile, "building its octree", octree::estimateBuildMemory(volumeFile));
-            octree::SparseVolume volume = octree::readVtl(volumeFile);
-            octree::BuildOptions o;
-            o.rule = *octree::parseFilterRule(step.filter);
-            o.tolerance = step.tolerance;
-            NullProgress quiet;
-            // After a partial re-sampling, only the region's ancestors are filtered again.
-            const Stage& sample = stages[sampleStage];
-            std::optional<octree::VoxelBox> region;
-            std::string updatedFrom;
-            // (cached or run: buildOrUpdate checks that the earlier build built the volume the
-            // region was re-sampled from).
-            if (!sample.record.detailsJson.empty()) {
-                const Json d = Json::parse(sample.record.detailsJson);
-                if (d.value("updated_region", Json()).is_array()) {
-                    const auto r = d["updated_region"].get<std::vector<std::uint32_t>>();
-                    region = octree::VoxelBox{{r.at(0), r.at(1), r.at(2)}, {r.at(3), r.at(4), r.at(5)}};
-                    updatedFrom = d.value("updated_from", std::string());
-                }
-            }
-            bool updated = false;
-            const octree::Octree tree = detail::buildOrUpdate(std::move(volume), o, region, updatedFrom, earlierBuild, quiet, updated);
-            octree::writeVto(tree, self.outputs.at("octree"));
-            // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
-            const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, ingest::loadMesh(sourceFile));
-            Json levels = Json::array();
-            for (std::uint32_t l = 0; l < tree.levelCount(); ++l)
-                levels.push_back({{"level", l},
-                                  {"stored_nodes", tree.stats[l].storedNodes},
-                                  {"filter_error_mean", tree.stats[l].filterErrorMean},
-                                  {"chord_error", fidelity.chords[l].error()},
-                                  {"beam_error_mean_abs", fidelity.beams[l].meanAbs},
-                                  {"beam_error_p95_abs", fidelity.beams[l].p95Abs}});
-            return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels},
-                        {"parameters", earlierBuild.parameters}, {"volume", sample.outputHashes.at("volume")},
-                        {"updated", updated}};
-        };
-    }
-
-    for (const RenderStep& step : pipeline.renders) {
-        Stage s{"render", step.name};
-        // Bindings of texels that were left out name texels the scene does not use.
-        std::vector<std::pair<std::string, std::string>> bindings;
-        for (const auto& binding : step.texels)
-            if (isBuilt(binding.second)) bindings.push_back(binding);
-        for (const auto& [sceneTexel, texel] : bindings) {
-            s.inputs.push_back(buildIndex.at(texel));
-            s.inputs.push_back(sourceIndex.at(std::find_if(pipeline.texels.begin(), pipeline.texels.end(),
-                                                           [&](const TexelStep& t) { return t.name == texel; })
-                                                  ->source));
-        }
-        s.outputs["image"] = root / "renders" / (step.name + ".exr");
-        s.outputs["preview"] = root / "renders" / (step.name + ".png");
-        s.outputs["stats"] = root / "renders" / (step.name + ".stats.json");
-        const std::size_t self = stages.size();
-        renderIndex[step.name] = self;
-        stages.push_back(std::move(s));
-        // Stages are addressed by index: the vector grows while the graph is built.
-        Stage& r = stages.back();
-        // The scene as this render sees it: bound texels point at the pipeline's artifacts.
-        auto boundScene = [&stages, step, bindings, self] {
-            render::Scene scene = render::loadScene(step.scene);
-            std::size_t input = 0;
-            for (const auto& [sceneTexel, texel] : bindings) {
-                render::TexelDef* found = &scene.texels[sceneTexelIndex(scene, sceneTexel)];
-                found->volume = stages[stages[self].inputs[input]].outputs.at("octree");
-                found->source = stages[stages[self].inputs[input + 1]].outputs.at("mesh");
-                input += 2;
-            }
-            return scene;
-        };
-        r.describe = [&stages, step, self, bindings, boundScene, header] {
-            std::ostringstream d;
-            d << header << "render " << step.renderer << " " << step.mode << "\nsize " << step.width << "x" << step.height
-              << " spp " << step.spp << " lod_bias " << step.lodBias << " shading " << step.shading
-              << " hybrid " << step.hybrid << " level_fit " << step.levelFit << "\napproximations "
-              << renderOptions(step).approximations.key() << "\nscene "
-              << hashFile(step.scene) << "\n";
-            const render::Scene scene = boundScene();
-            for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";
-            // The files of the texels the scene itself names, once each; bound texels are the
-            // pipeline's artifacts, whose hashes the inputs give below.
-            std::set<std::size_t> unbound;
-            for (const auto& surface : scene.surfaces)
-                if (surface.texel &&
-                    std::none_of(bindings.begin(), bindings.end(),
-                                 [&](const auto& b) { return b.first == scene.texels[*surface.texel].name; }))
-                    unbound.insert(*surface.texel);
-            for (std::size_t t : unbound) {
-                const render::TexelDef& texel = scene.texels[t];
-                d << "texel " << t << " " << hashFile(texel.volume);
-                if (step.renderer == "reference" && !texel.source.empty()) d << " source " << hashFile(texel.source);
-                d << "\n";
-            }
-            for (std::size_t input : stages[self].inputs)
-                for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
-            return d.str();
-        };
-        r.run = [&budget, step, boundScene](Stage& self) {
-            NullProgress quiet;
-            const render::Scene scene = boundScene();
-            const bool reference = step.renderer == "reference";
-            const render::ReferenceOptions referenceSettings = referenceOptions(step);
-            const render::RenderOptions renderSettings = renderOptions(step);
-            const int width = step.width > 0 ? step.width : scene.camera.width;
-            const int height = step.height > 0 ? step.height : scene.camera.height;
-            const auto held = budget.reserve(step.scene, "rendering " + std::to_string(width) + "x" + std::to_string(height),
-                                             reference ? render::estimateReferenceMemory(scene, referenceSettings)
-                                                       : render::estimateRenderMemory(scene, renderSettings));
-            const render::RenderResult result = reference ? render::renderReference(scene, referenceSettings, quiet)
-                                                          : render::renderScene(scene, renderSettings, quiet);
-            // The image, its preview and its stats all or none (commitAll).
-            AtomicOutputFile image(self.outputs.at("image")), preview(self.outputs.at("preview")),
-                stats(self.outputs.at("stats"));
-            render::writeExr(result.image, image);
-            render::writePng(result.image, preview);
-            render::writeStatsJson(result.stats, stats);
-            commitAll({&image, &preview, &stats});
-            return Json::parse(readText(self.outputs.at("stats")));
-        };
-    }
-
-    for (const CompareStep& step : pipeline.compares) {
-        Stage s{"compare", step.name};
-        s.inputs = {renderIndex.at(step.a), renderIndex.at(step.b)};
-        s.outputs["metrics"] = root / "compares" / (step.name + ".json");
-        s.outputs["heatmap"] = root / "compares" / (step.name + ".diff.png");
-        const std::size_t self = stages.size();
-        stages.push_back(std::move(s));
-        Stage& c = stages.back();
-        c.describe = [&stages, self, header] {
-            const Stage& me = stages[self];
-            return header + "compare\n" + stages[me.inputs[0]].outputHashes.at("image") + "\n" +
-                   stages[me.inputs[1]].outputHashes.at("image") + "\n";
-        };
-        c.run = [&stages, step](Stage& self) {
-            const render::Image a = render::readExr(stages[self.inputs[0]].outputs.at("image"));
-            const render::Image b = render::readExr(stages[self.inputs[1]].outputs.at("image"));
-            if (a.width != b.width || a.height != b.height)
-                throw InputError(stages[self.inputs[1]].outputs.at("image"), "size differs from render '" + step.a + "'");
-            const render::ImageComparison m = render::compareImages(a, b);
-            render::writePng(render::errorHeatMap(a, b, m.worstError), self.outputs.at("heatmap"));
-            Json metrics = {{"a", step.a},       {"b", step.b},       {"rmse", m.rmse},
-                            {"ssim", m.ssim},     {"worst_error", m.worstError},
-                            {"psnr", std::isfinite(m.psnr) ? Json(m.psnr) : Json(nullptr)}};
-            writeFileAtomically(self.outputs.at("metrics"), metrics.dump(2) + "\n");
-            return metrics;
-        };
-    }
-
-    refuseSharedOutputs(stages, root, pipeline.file);
-
-    // Only now, with the pipeline accepted whole: a refused one (exit 3) left an empty output
-    // directory tree behind (found by fuzz_cli.py).
-    std::error_code made;
-    fs::create_directories(root, made);
-    if (made) throw IoError(root, "cannot create the output directory: " + made.message());
+    createFolder(root);
     // One run per output folder (folder_lock.h): held until this run returns.
     const FolderLock lock(root, options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse);
-    for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
-        std::error_code error;
-        fs::create_directories(root / folder, error);
-        if (error) throw IoError(root / folder, "cannot create the output directory: " + error.message());
-        // A killed run leaves the hidden temporaries of AtomicOutputFile behind; holding the
-        // folder's lock, this run knows no other run writes them, so they can go.
-        for (const auto& entry : fs::directory_iterator(root / folder, error)) {
-            const std::string file = entry.path().filename().string();
-            if (file.front() == '.' && file.find(".tmp.") != std::string::npos) fs::remove(entry.path(), error);
-        }
-    }
+    prepareFolders(root);
+    // The plan for the progress display, made under the lock (no other run changes the cache).
+    if (options.observer) options.observer->planned(plan(stages, root, options.force));
 
     MemoryMonitor memory;
     // Run wave by wave; a wave is a run of stages of one kind.
     tbb::task_arena arena(options.jobs > 0 ? options.jobs : tbb::task_arena::automatic);
-    std::mutex logMutex;
     std::size_t first = 0;
     while (first < stages.size()) {
         std::size_t last = first;
         while (last < stages.size() && stages[last].kind == stages[first].kind) ++last;
         arena.execute([&] {
             tbb::parallel_for(first, last, [&](std::size_t i) {
-                Stage& stage = stages[i];
-                stage.record.kind = stage.kind;
-                stage.record.name = stage.name;
-                for (const auto& [role, path] : stage.outputs) stage.record.outputs.push_back(path);
-                for (std::size_t input : stage.inputs) {
-                    const Status upstream = stages[input].record.status;
-                    if (upstream == Status::Failed || upstream == Status::Skipped) {
-                        stage.record.status = Status::Skipped;
-                        stage.record.message = "not run: " + stages[input].kind + " '" + stages[input].name + "' " +
-                                               statusName(upstream);
-                        std::lock_guard lock(logMutex);
-                        log("skipped " + stage.kind + " " + stage.name + " (" + stage.record.message + ")");
-                        return;
-                    }
-                }
-                try {
-                    stage.record.key = hashBytes(stage.describe());
-                    if (!options.force && upToDate(stage, root)) {
-                        stage.record.status = Status::Cached;
-                        std::lock_guard lock(logMutex);
-                        log("cached  " + stage.kind + " " + stage.name);
-                        return;
-                    }
-                    {
-                        std::lock_guard lock(logMutex);
-                        log("run     " + stage.kind + " " + stage.name);
-                    }
-                    const auto t = std::chrono::steady_clock::now();
-                    const std::uint64_t watch = memory.start();
-                    Json details;
-                    try {
-                        details = stage.run(stage);
-                    } catch (...) {
-                        memory.stop(watch);
-                        throw;
-                    }
-                    stage.record.peakMemoryBytes = memory.stop(watch);
-                    stage.record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-                    for (const auto& [role, path] : stage.outputs) stage.outputHashes[role] = hashFile(path);
-                    writeManifest(stage, root, details);
-                    stage.record.detailsJson = details.dump();
-                    stage.record.status = Status::Ran;
-                } catch (const std::exception& e) {
-                    stage.record.status = Status::Failed;
-                    stage.record.message = e.what();
-                    stage.record.badInput = dynamic_cast<const InputError*>(&e) != nullptr;
-                    std::lock_guard lock(logMutex);
-                    log("failed  " + stage.kind + " " + stage.name + ": " + e.what());
-                }
+                runStage(stages, i, root, options, memory, log);
+                if (options.observer) options.observer->finished(i, stages[i].record);
             });
         });
         first = last;

@@ -191,6 +191,13 @@ Image errorHeatMap(const Image& a, const Image& b, double fullScale) {
     return map;
 }
 
+double heatMapScale(const Image& truth) {
+    double sum = 0;
+    for (std::size_t p = 0; p < truth.pixels(); ++p)
+        for (std::size_t c = 0; c < 3; ++c) sum += double(truth.rgba[4 * p + c]) * double(truth.rgba[4 * p + c]);
+    return truth.pixels() > 0 ? std::sqrt(sum / (3.0 * double(truth.pixels()))) : 0.0;
+}
+
 std::vector<std::string> comparedChannels(const std::filesystem::path& exrFile) {
     if (imageFormat(exrFile) == "png") return {"A", "B", "G", "R"};  // readPng's, always
     checkInputFile(exrFile, std::uint64_t(4) << 30, "EXR image");  // OpenEXR would hang on a FIFO

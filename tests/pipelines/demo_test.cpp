@@ -43,6 +43,10 @@ TEST(Demo, RendersEveryFigureReportsThemAndIsCachedTheSecondTime) {
         if (stage["kind"] == "compare") {
             ++compares;
             EXPECT_GT(stage["details"]["rmse"].get<double>(), 0) << "a coarser level is a different image";
+            // A coarser level is set against the finest, never taken for the truth.
+            if (stage["name"].get<std::string>().ends_with("-vs-finest")) {
+                EXPECT_EQ(stage["details"]["b"], "fig4-level-minus-0") << stage["name"];
+            }
         }
     }
     EXPECT_EQ(renders, 28) << "Figs. 7, 6, 10, 9, 11, 1 and four levels of Fig. 4 (10), their 7 references, "
@@ -61,6 +65,11 @@ TEST(Demo, RendersEveryFigureReportsThemAndIsCachedTheSecondTime) {
         }
     }
     EXPECT_TRUE(studyFound);
+    // The report: the finest level's table is one of differences, and no level is a truth.
+    const std::string html = vtex::test::readText(dir / "report.html");
+    EXPECT_NE(html.find("Difference from fig4-level-minus-0"), std::string::npos);
+    for (const char* level : {"fig4-level-minus-1", "fig4-level-minus-2", "fig4-level-minus-3"})
+        EXPECT_EQ(html.find("Against " + std::string(level)), std::string::npos) << level;
     EXPECT_NE(r.out.find("error against run time"), std::string::npos) << r.out;
 
     // The scenes the demo leaves in DIR/inputs name the texels it built: `vtex render` takes them

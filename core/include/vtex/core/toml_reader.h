@@ -41,14 +41,18 @@ public:
         throw InputError(mFile, problem, key);
     }
 
+    /// Also records each unknown key's path in `keys` (a caller that refuses them: `--strict`).
+    void collectUnknownKeys(std::vector<std::string>& keys) { mUnknownKeys = &keys; }
+
     /// Warns about the keys of `table` that are not in `known`.
     void checkKeys(const toml::table& table, const std::string& path,
                    std::initializer_list<std::string_view> known) {
         for (const auto& [key, value] : table) {
             bool found = false;
             for (auto k : known) found = found || key.str() == k;
-            if (!found)
-                mWarnings.push_back(oneLine(mFile.string() + ": unknown key '" + join(path, key.str()) + "' ignored"));
+            if (found) continue;
+            mWarnings.push_back(oneLine(mFile.string() + ": unknown key '" + join(path, key.str()) + "' ignored"));
+            if (mUnknownKeys) mUnknownKeys->push_back(join(path, key.str()));
         }
     }
 
@@ -177,6 +181,7 @@ public:
 private:
     std::filesystem::path mFile;
     std::vector<std::string>& mWarnings;
+    std::vector<std::string>* mUnknownKeys = nullptr;
 };
 
 }  // namespace vtex

@@ -10,7 +10,8 @@
 /// The figures (Neyret 1994): Fig. 7 grass on a hill of 1404 bilinear faces; Fig. 6 bushes
 /// tiling a 50×500 region to the horizon; Fig. 10 fur on a torus of 240 faces; Fig. 9 a forest
 /// on a hill of 578 faces; Fig. 11 building elements on 81 faces; Fig. 1 one texel of brushed
-/// aluminium; Fig. 4 one texel at four successive octree levels, each compared with the finest.
+/// aluminium; Fig. 4 one texel at four successive octree levels, each measured against the
+/// reference and shown as its difference from the finest (not an error: neither is the truth).
 /// Every figure is paired with its explicit-geometry reference (`vtex reference`) and its
 /// measured error, and an error-against-run-time study on the forest puts texel renders (LoD
 /// bias −1/0/+1, 1 and 4 spp) and reference renders (1 to 64 spp) against a 256-spp reference.

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <vtex/core/progress.h>
+#include <vtex/pipelines/run_observer.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -95,7 +96,8 @@ struct Pipeline {
     /// texel only to the finest level its renders can use (render::finestUsefulLevels) and leave
     /// out the texels no render uses.
     bool fitResolution = true;
-    std::vector<std::string> warnings;  ///< unknown keys
+    std::vector<std::string> warnings;  ///< unknown keys, as messages naming the file
+    std::vector<std::string> unknownKeys;  ///< the same keys' paths ("render[2].spp_typo"), for `--strict`
 };
 
 /// Reads and validates a pipeline file completely (names unique, references resolved, enums and
@@ -116,8 +118,11 @@ struct RunOptions {
     std::uint64_t maxMemoryBytes = 0;
     /// Another run holds the output folder (core's FolderLock): wait for it instead of failing.
     bool waitForLock = false;
-    /// One line per stage event ("run texel grass", "cached …", "failed …"); may be empty.
+    /// One line per stage event ("run     render a (changed parameter: spp 1 → 4)", "ran     render
+    /// a in 1.52 s, peak 210 MiB", "cached  …", "failed  …"); may be empty. Called one line at a time.
     std::function<void(const std::string&)> log;
+    /// The plan, each stage's start, progress and end (run_observer.h); may be null.
+    RunObserver* observer = nullptr;
 };
 
 struct StageRecord {
@@ -161,5 +166,10 @@ struct RunReport {
 /// its record). Throws vtex::InputError, before anything is made, when the output folder exists
 /// and is not a directory (checkOutputFolder), vtex::IoError when it cannot be written.
 RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options);
+
+/// What runPipeline would do, writing nothing (`vtex run --dry-run`): every stage in run order,
+/// whether it would run and why. A stage whose input would run is planned to run too (its input's
+/// new content is not known yet). Throws as runPipeline does before it starts.
+std::vector<PlannedStage> planPipeline(const Pipeline& pipeline, const RunOptions& options);
 
 }  // namespace vtex::pipelines

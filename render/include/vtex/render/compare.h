@@ -57,6 +57,12 @@ ImageComparison compareImages(const Image& a, const Image& b);
 /// `fullScale` (> 0; pass the worst error for a self-scaled map). Equal sizes required.
 Image errorHeatMap(const Image& a, const Image& b, double fullScale);
 
+/// A heat map's full scale for the comparisons against `truth`: the truth's RMS value over pixels
+/// and R, G, B (white: a pixel wrong by as much as the image is bright). It depends on the truth alone, so that every image measured against
+/// one truth (a study) shares one scale and a 64-spp map is darker than a 1-spp one, where a map
+/// scaled to its own worst pixel made both look as hot; 0 for a black truth.
+double heatMapScale(const Image& truth);
+
 /// The colour channels of an EXR file that take part in a comparison (its channel names less
 /// the AOVs "Z" and "level"), sorted. Throws vtex::InputError when the file cannot be read.
 std::vector<std::string> comparedChannels(const std::filesystem::path& exrFile);
