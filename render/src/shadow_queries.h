@@ -114,7 +114,9 @@ public:
     // face's bilinear interpolation between its nodes, once per cell crossed. Chains longer than
     // kMaxChain cells (a grazing light over cells much smaller than their shell), nodes where
     // the hybrid would trace the mesh, and every node when ApproximationBudget::chainLatticeNodes
-    // is off take the exact ray from the node itself.
+    // is off take the exact ray from the node itself. Which node of a chain that long gets the
+    // exact ray depends on where the chain began, so only there could an image depend on the
+    // order of the tiles (a node's value is otherwise a function of the node alone).
     double nodeTransmittance(int slot, int primIndex, const Vec3& rn, const Vec3& l, int depth) const {
         const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
         const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
