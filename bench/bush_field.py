@@ -53,7 +53,7 @@ source   = "%s.glb"
 material = { diffuse = [1, 1, 1], specular = [0, 0, 0], ambient = [0, 0, 0] }
 
 [[surface]]
-mesh      = "ground.obj"
+mesh      = "%s"
 texel     = "bush"
 height    = 1.0
 placement = "on"
@@ -66,9 +66,9 @@ COLUMNS = ['section', 'view', 'distance', 'row', 'renderer', 'spp', 'args', 'run
            'mean_g', 'truth_mean_g', 'truth_spp', 'time_vs_ref16', 'time_vs_ref1']
 
 
-def write_ground():
-    n = GROUND
-    with open('ground.obj', 'w') as f:
+def write_ground(n=GROUND, path='ground.obj'):
+    """n×n unit quads in z = 0, centred on the origin, counter-clockwise seen from +z."""
+    with open(path, 'w') as f:
         for j in range(n + 1):
             for i in range(n + 1):
                 f.write('v %g %g 0\n' % (-n / 2 + i, -n / 2 + j))
@@ -78,9 +78,20 @@ def write_ground():
                 f.write('f %d %d %d %d\n' % (a, a + 1, a + n + 2, a + n + 1))
 
 
-def write_scene(path, position, width, height, bush='bush'):
+def write_scene(path, position, width, height, bush='bush', mesh='ground.obj'):
     with open(path, 'w') as f:
-        f.write(SCENE % (tuple(position) + LOOK_AT + (width, height, bush, bush)))
+        f.write(SCENE % (tuple(position) + LOOK_AT + (width, height, bush, bush, mesh)))
+
+
+def grid(n, width, height):
+    """grid_N.obj, the field's ground widened to n×n quads, and grid_N.toml, seen from the far
+    camera's direction at n/20 of its distance, so that the whole grid fills the image as the
+    field does (bench/big_mesh.sh)."""
+    mesh = 'grid_%d.obj' % n
+    write_ground(n, mesh)
+    s = n / GROUND
+    position = tuple(c + (f - c) * s for f, c in zip(CAMERAS['far'], LOOK_AT))
+    write_scene('grid_%d.toml' % n, position, width, height, mesh=mesh)
 
 
 def distance(p):
@@ -371,5 +382,7 @@ if __name__ == '__main__':
         truth_key(*sys.argv[2:])
     elif len(sys.argv) == 3 and sys.argv[1] == 'report':
         report(int(sys.argv[2]))
+    elif len(sys.argv) == 5 and sys.argv[1] == 'grid':
+        grid(int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]))
     else:
         sys.exit(__doc__)
