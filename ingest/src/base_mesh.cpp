@@ -14,15 +14,40 @@
 
 #include <algorithm>
 #include <cmath>
+#include <bit>
 #include <map>
+#include <span>
+#include <unordered_map>
 
 namespace vtex::ingest {
 namespace {
 
-using Polygon = std::vector<std::uint32_t>;
 // A polygon's material and group (QuadMesh::faceNames): triangles of different ones are never
 // one quad.
 using Label = std::array<std::uint32_t, 2>;
+using Corners = std::span<const std::uint32_t>;
+using Quad = std::array<std::uint32_t, 4>;
+
+// The source polygons, their corners in one array (a million faces would be a million heap
+// vectors otherwise: issue 18's 10⁶-face load).
+struct Polygons {
+    std::vector<std::uint32_t> corners;
+    std::vector<std::size_t> start{0};  ///< polygon i is corners[start[i], start[i + 1])
+    std::vector<Label> labels;
+
+    std::size_t size() const { return labels.size(); }
+    Corners operator[](std::size_t i) const { return {corners.data() + start[i], start[i + 1] - start[i]}; }
+    void add(Corners polygon, const Label& label) {
+        corners.insert(corners.end(), polygon.begin(), polygon.end());
+        start.push_back(corners.size());
+        labels.push_back(label);
+    }
+    void reserve(std::size_t polygons, std::size_t totalCorners) {
+        corners.reserve(totalCorners);
+        start.reserve(polygons + 1);
+        labels.reserve(polygons);
+    }
+};
 
 // Two triangles that were one quad an exporter triangulated along its diagonal become that quad
 // again, if their normals are within kMaxFold of each other and their union is convex
@@ -35,7 +60,7 @@ struct TrianglePairs {
     Eigen::Vector3d at(std::uint32_t v) const { return positions[v].cast<double>(); }
 
     // quad = (a, d, b, c) of triangles a→b→c and b→a→d: planar enough and convex.
-    bool mergeable(const Polygon& quad) const {
+    bool mergeable(const Quad& quad) const {
         const std::uint32_t a = quad[0], d = quad[1], b = quad[2], c = quad[3];
         const Eigen::Vector3d n1 = (at(b) - at(a)).cross(at(c) - at(a)), n2 = (at(a) - at(b)).cross(at(d) - at(b));
         if (!(n1.norm() > 0) || !(n2.norm() > 0)) return false;
@@ -49,7 +74,7 @@ struct TrianglePairs {
     }
 
     // The longest edge of triangle t, as (from, to) in its winding.
-    std::pair<std::uint32_t, std::uint32_t> longestEdge(const Polygon& t) const {
+    std::pair<std::uint32_t, std::uint32_t> longestEdge(Corners t) const {
         int best = 0;
         double length = -1;
         for (int k = 0; k < 3; ++k) {
@@ -65,25 +90,24 @@ struct TrianglePairs {
     // The pairs an exporter writes one after the other as a fan, (v0, v1, v2) then (v0, v2, v3):
     // the quad (v0, v1, v2, v3), in its own orientation, so that texels keep their direction
     // from cell to cell.
-    void mergeFans(std::vector<Polygon>& polygons, std::vector<Label>& labels) const {
-        std::vector<Polygon> out;
-        std::vector<Label> outLabels;
+    Polygons mergeFans(const Polygons& polygons) const {
+        Polygons out;
+        out.reserve(polygons.size(), polygons.corners.size());
         for (std::size_t i = 0; i < polygons.size(); ++i) {
-            const Polygon& t = polygons[i];
-            outLabels.push_back(labels[i]);
-            if (i + 1 < polygons.size() && t.size() == 3 && polygons[i + 1].size() == 3 && labels[i] == labels[i + 1]) {
-                const Polygon& u = polygons[i + 1];
+            const Corners t = polygons[i];
+            if (i + 1 < polygons.size() && t.size() == 3 && polygons[i + 1].size() == 3 &&
+                polygons.labels[i] == polygons.labels[i + 1]) {
+                const Corners u = polygons[i + 1];
                 // The shared diagonal v0–v2; as (a, d, b, c): a = v2, b = v0.
                 if (u[0] == t[0] && u[1] == t[2] && u[2] != t[1] && mergeable({t[2], u[2], t[0], t[1]})) {
-                    out.push_back({t[0], t[1], t[2], u[2]});
+                    out.add(Quad{t[0], t[1], t[2], u[2]}, polygons.labels[i]);
                     ++i;
                     continue;
                 }
             }
-            out.push_back(t);
+            out.add(t, polygons.labels[i]);
         }
-        polygons = std::move(out);
-        labels = std::move(outLabels);
+        return out;
     }
 
     // Any two triangles sharing an edge that is the longest of both, wound consistently: the quad
@@ -93,46 +117,47 @@ struct TrianglePairs {
     // the lowest vertex index turned cells, as the reader numbers vertices by first use:
     // PerFaceTexels.ATriangulatedGridRendersAsItsQuads). A triangle pairs only with a later one
     // (an earlier one had its turn).
-    void mergeLongestEdges(std::vector<Polygon>& polygons, std::vector<Label>& labels) const {
+    Polygons mergeLongestEdges(const Polygons& polygons) const {
+        const auto key = [](std::uint32_t from, std::uint32_t to) { return std::uint64_t(from) << 32 | to; };
         std::vector<std::pair<std::uint32_t, std::uint32_t>> edge(polygons.size());
-        std::map<std::pair<std::uint32_t, std::uint32_t>, std::size_t> byEdge;
+        std::unordered_map<std::uint64_t, std::size_t> byEdge;  // the first triangle with that longest edge
         for (std::size_t i = 0; i < polygons.size(); ++i)
-            if (polygons[i].size() == 3) byEdge.emplace(edge[i] = longestEdge(polygons[i]), i);
+            if (polygons[i].size() == 3) {
+                edge[i] = longestEdge(polygons[i]);
+                byEdge.emplace(key(edge[i].first, edge[i].second), i);
+            }
         std::vector<char> merged(polygons.size(), 0);
-        std::vector<Polygon> out;
-        std::vector<Label> outLabels;
+        Polygons out;
+        out.reserve(polygons.size(), polygons.corners.size());
         for (std::size_t i = 0; i < polygons.size(); ++i) {
             if (merged[i]) continue;
-            const Polygon& t = polygons[i];
-            outLabels.push_back(labels[i]);
-            const auto partner = t.size() == 3 ? byEdge.find({edge[i].second, edge[i].first}) : byEdge.end();
-            if (partner != byEdge.end() && partner->second > i && labels[partner->second] == labels[i]) {
+            const Corners t = polygons[i];
+            const Label& label = polygons.labels[i];
+            const auto partner = t.size() == 3 ? byEdge.find(key(edge[i].second, edge[i].first)) : byEdge.end();
+            if (partner != byEdge.end() && partner->second > i && polygons.labels[partner->second] == label) {
                 const auto [a, b] = edge[i];
                 // The corner off the edge (a degenerate triangle has none: a, which mergeable refuses).
-                const auto apex = [a = a, b = b](const Polygon& p) {
+                const auto apex = [a = a, b = b](Corners p) {
                     const auto v = std::find_if(p.begin(), p.end(), [&](std::uint32_t w) { return w != a && w != b; });
                     return v == p.end() ? a : *v;
                 };
-                Polygon quad{a, apex(polygons[partner->second]), b, apex(t)};  // t = a→b→c, its partner b→a→d
+                Quad quad{a, apex(polygons[partner->second]), b, apex(t)};  // t = a→b→c, its partner b→a→d
                 if (mergeable(quad)) {
                     std::rotate(quad.begin(), std::find(quad.begin(), quad.end(), t[0]), quad.end());
-                    out.push_back(std::move(quad));
+                    out.add(quad, label);
                     merged[partner->second] = 1;
                     continue;
                 }
             }
-            out.push_back(t);
+            out.add(t, label);
         }
-        polygons = std::move(out);
-        labels = std::move(outLabels);
+        return out;
     }
 };
 
-void mergeTrianglePairs(std::vector<Polygon>& polygons, std::vector<Label>& labels,
-                        const std::vector<Eigen::Vector3f>& positions) {
+Polygons mergeTrianglePairs(const Polygons& polygons, const std::vector<Eigen::Vector3f>& positions) {
     const TrianglePairs pairs{positions};
-    pairs.mergeFans(polygons, labels);
-    pairs.mergeLongestEdges(polygons, labels);
+    return pairs.mergeLongestEdges(pairs.mergeFans(polygons));
 }
 
 // The material and group names of the raw mesh's triangles as QuadMesh::names indices, one label
@@ -153,6 +178,50 @@ std::vector<Label> triangleLabels(const detail::RawMesh& raw, std::vector<std::s
             labels[t][1] = nameIndex(raw.groups[raw.triangleGroups[t]]);
     }
     return labels;
+}
+
+// The positions' vertex ids by position: vertices at the same point (UV or normal seams) share
+// one, and −0 is the same point as +0.
+std::vector<std::uint32_t> positionIds(const std::vector<Eigen::Vector3f>& positions, std::size_t& count) {
+    using Key = std::array<std::uint32_t, 3>;
+    struct KeyHash {
+        std::size_t operator()(const Key& k) const {
+            return std::size_t(k[0] * 0x9E3779B97F4A7C15ULL ^ k[1] * 0xC2B2AE3D27D4EB4FULL ^ k[2] * 0x165667B19E3779F9ULL);
+        }
+    };
+    const auto bits = [](float x) { return std::bit_cast<std::uint32_t>(x == 0.0f ? 0.0f : x); };
+    std::unordered_map<Key, std::uint32_t, KeyHash> ids;
+    ids.reserve(positions.size());
+    std::vector<std::uint32_t> id(positions.size());
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+        const auto& p = positions[v];
+        id[v] = ids.try_emplace(Key{bits(p.x()), bits(p.y()), bits(p.z())}, std::uint32_t(ids.size())).first->second;
+    }
+    count = ids.size();
+    return id;
+}
+
+// Unit normals, one per position: the file's when valid, else area-weighted over the faces around
+// each position (vertices at the same position share them, across UV seams); +z for a position
+// no face uses.
+std::vector<Eigen::Vector3f> vertexNormals(const QuadMesh& mesh, const std::vector<Eigen::Vector3f>& fileNormals) {
+    std::size_t count = 0;
+    const std::vector<std::uint32_t> id = positionIds(mesh.positions, count);
+    std::vector<Eigen::Vector3d> area(count, Eigen::Vector3d::Zero());
+    for (const auto& q : mesh.quads) {
+        const auto at = [&](std::uint32_t v) { return mesh.positions[v].cast<double>(); };
+        // Twice the vector area of the (possibly non-planar) quad: the cross of its diagonals.
+        const Eigen::Vector3d a = (at(q[2]) - at(q[0])).cross(at(q[3]) - at(q[1]));
+        for (auto v : q) area[id[v]] += a;
+    }
+    std::vector<Eigen::Vector3f> normals(mesh.positions.size(), Eigen::Vector3f::UnitZ());
+    for (std::size_t v = 0; v < normals.size(); ++v) {
+        if (v < fileNormals.size() && fileNormals[v].allFinite() && fileNormals[v].squaredNorm() > 1e-12f)
+            normals[v] = fileNormals[v].normalized();
+        else if (area[id[v]].norm() > 0)
+            normals[v] = area[id[v]].normalized().cast<float>();
+    }
+    return normals;
 }
 
 }  // namespace
@@ -183,54 +252,33 @@ QuadMesh loadBaseMesh(const std::filesystem::path& file, const IngestOptions& op
     if (raw.polygonTriangles.empty()) raw.polygonTriangles.assign(raw.triangles.size(), 1);
     QuadMesh mesh;
     const std::vector<Label> triangleLabel = triangleLabels(raw, mesh.names);
-    std::vector<Polygon> polygons;
-    std::vector<Label> labels;
+    Polygons fans;
+    fans.reserve(raw.polygonTriangles.size(), raw.triangles.size() + 2 * raw.polygonTriangles.size());
+    std::vector<std::uint32_t> fan;
     std::size_t t = 0;
     for (std::uint32_t count : raw.polygonTriangles) {
         if (t + count > raw.triangles.size()) throw InputError(file, "internal: polygon table mismatch");
-        Polygon polygon{raw.triangles[t][0], raw.triangles[t][1], raw.triangles[t][2]};
-        for (std::uint32_t k = 1; k < count; ++k) polygon.push_back(raw.triangles[t + k][2]);
-        labels.push_back(triangleLabel[t]);
+        fan.assign({raw.triangles[t][0], raw.triangles[t][1], raw.triangles[t][2]});
+        for (std::uint32_t k = 1; k < count; ++k) fan.push_back(raw.triangles[t + k][2]);
+        fans.add(fan, triangleLabel[t]);
         t += count;
-        polygons.push_back(std::move(polygon));
     }
-    mergeTrianglePairs(polygons, labels, raw.positions);
+    const Polygons polygons = mergeTrianglePairs(fans, raw.positions);
+    fans = {};
+    mesh.quads.reserve(polygons.size());
     for (std::size_t p = 0; p < polygons.size(); ++p) {
-        const Polygon& polygon = polygons[p];
+        const Corners polygon = polygons[p];
         const std::size_t first = mesh.quads.size();
         std::size_t i = 1;
         for (; i + 2 < polygon.size(); i += 2) mesh.quads.push_back({polygon[0], polygon[i], polygon[i + 1], polygon[i + 2]});
         if (i + 1 < polygon.size()) mesh.quads.push_back({polygon[0], polygon[i], polygon[i + 1], polygon[i + 1]});
-        if (!mesh.names.empty()) mesh.faceNames.insert(mesh.faceNames.end(), mesh.quads.size() - first, labels[p]);
+        if (!mesh.names.empty())
+            mesh.faceNames.insert(mesh.faceNames.end(), mesh.quads.size() - first, polygons.labels[p]);
     }
     if (mesh.quads.empty()) throw InputError(file, "no faces");
-
-    // Positions, UVs; normals: the file's when valid, else area-weighted over the faces around
-    // each position (vertices at the same position share them, across UV seams).
-    mesh.positions = raw.positions;
-    mesh.uvs = raw.uvs;
-    std::map<std::array<float, 3>, Eigen::Vector3d> byPosition;
-    for (const auto& q : mesh.quads) {
-        const Eigen::Vector3d a = raw.positions[q[0]].cast<double>(), b = raw.positions[q[1]].cast<double>(),
-                              c = raw.positions[q[2]].cast<double>(), d = raw.positions[q[3]].cast<double>();
-        // Twice the vector area of the (possibly non-planar) quad: the cross of its diagonals.
-        const Eigen::Vector3d area = (c - a).cross(d - b);
-        for (auto v : q) {
-            const auto& p = raw.positions[v];
-            // (Eigen vectors are not zero-initialised by default.)
-            byPosition.try_emplace({p.x(), p.y(), p.z()}, Eigen::Vector3d::Zero()).first->second += area;
-        }
-    }
-    mesh.normals.resize(mesh.positions.size(), Eigen::Vector3f::UnitZ());
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-        if (v < raw.normals.size() && raw.normals[v].allFinite() && raw.normals[v].squaredNorm() > 1e-12f) {
-            mesh.normals[v] = raw.normals[v].normalized();
-            continue;
-        }
-        const auto& p = mesh.positions[v];
-        const auto it = byPosition.find({p.x(), p.y(), p.z()});
-        if (it != byPosition.end() && it->second.norm() > 0) mesh.normals[v] = it->second.normalized().cast<float>();
-    }
+    mesh.positions = std::move(raw.positions);
+    mesh.uvs = std::move(raw.uvs);
+    mesh.normals = vertexNormals(mesh, raw.normals);
     return mesh;
 }
 

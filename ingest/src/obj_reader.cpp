@@ -95,9 +95,9 @@ public:
             throw InputError(mFile, mSkippedPrimitives ? "no faces (points and lines only)" : "no faces");
         // Normals and UVs: keep the arrays only when some corner had them.
         if (!mAnyNormal) mOut.normals.clear();
-        std::vector<char> usedPositions(mPositions.size(), 0);
-        for (const auto& [corner, index] : mVertexIndex) usedPositions[std::size_t(corner.v)] = 1;
-        mOut.repairs.unreferencedVertices = std::uint64_t(std::count(usedPositions.begin(), usedPositions.end(), 0));
+        const auto used = std::count_if(mFirstCorner.begin(), mFirstCorner.end(),
+                                        [](const FirstCorner& c) { return c.vertex != kNoVertex; });
+        mOut.repairs.unreferencedVertices = std::uint64_t(mPositions.size()) - std::uint64_t(used);
         if (!mAnyUv) mOut.uvs.clear();
         return std::move(mOut);
     }
@@ -204,17 +204,30 @@ private:
         mOut.polygonTriangles.push_back(std::uint32_t(newTriangles));
     }
 
+    // The output vertex of a corner: one per distinct (v, vt, vn), numbered by first use. Most
+    // corners repeat their position's first corner, so a table by position index answers them
+    // without hashing; the map holds only the other (vt, vn) pairs of a position.
     std::uint32_t vertexFor(const Corner& corner) {
-        auto [it, inserted] = mVertexIndex.try_emplace(corner, std::uint32_t(mOut.positions.size()));
-        if (inserted) {
-            if (mOut.positions.size() >= std::numeric_limits<std::uint32_t>::max() - 1) fail("more than 2^32 vertices");
-            mOut.positions.push_back(mPositions[std::size_t(corner.v)]);
-            if (corner.vn >= 0) mAnyNormal = true;
-            if (corner.vt >= 0) mAnyUv = true;
-            mOut.normals.push_back(corner.vn >= 0 ? mNormals[std::size_t(corner.vn)] : Eigen::Vector3f::Zero());
-            mOut.uvs.push_back(corner.vt >= 0 ? mTexcoords[std::size_t(corner.vt)] : Eigen::Vector2f::Zero());
+        if (std::size_t(corner.v) >= mFirstCorner.size()) mFirstCorner.resize(mPositions.size());
+        FirstCorner& first = mFirstCorner[std::size_t(corner.v)];
+        if (first.vertex == kNoVertex) {
+            first = {newVertex(corner), corner.vt, corner.vn};
+            return first.vertex;
         }
+        if (first.vt == corner.vt && first.vn == corner.vn) return first.vertex;
+        const auto [it, inserted] = mVertexIndex.try_emplace(corner, kNoVertex);
+        if (inserted) it->second = newVertex(corner);
         return it->second;
+    }
+
+    std::uint32_t newVertex(const Corner& corner) {
+        if (mOut.positions.size() >= std::numeric_limits<std::uint32_t>::max() - 1) fail("more than 2^32 vertices");
+        mOut.positions.push_back(mPositions[std::size_t(corner.v)]);
+        if (corner.vn >= 0) mAnyNormal = true;
+        if (corner.vt >= 0) mAnyUv = true;
+        mOut.normals.push_back(corner.vn >= 0 ? mNormals[std::size_t(corner.vn)] : Eigen::Vector3f::Zero());
+        mOut.uvs.push_back(corner.vt >= 0 ? mTexcoords[std::size_t(corner.vt)] : Eigen::Vector2f::Zero());
+        return std::uint32_t(mOut.positions.size() - 1);
     }
 
     std::uint32_t currentMaterial() {
@@ -366,7 +379,14 @@ private:
     std::vector<Eigen::Vector2f> mTexcoords;
     std::vector<Eigen::Vector3f> mNormals;
     std::vector<Corner> mCorners;
-    std::unordered_map<Corner, std::uint32_t, CornerHash> mVertexIndex;
+    // Per position index, the output vertex of its first corner and that corner's vt, vn.
+    static constexpr std::uint32_t kNoVertex = 0xffffffffu;
+    struct FirstCorner {
+        std::uint32_t vertex = kNoVertex;
+        std::int64_t vt = -1, vn = -1;
+    };
+    std::vector<FirstCorner> mFirstCorner;
+    std::unordered_map<Corner, std::uint32_t, CornerHash> mVertexIndex;  // the other corners
     std::unordered_map<std::string, int> mMaterialByName;
     std::unordered_map<std::string, int> mTextureByName;
     std::unordered_map<std::string, std::uint32_t> mGroupByName;
