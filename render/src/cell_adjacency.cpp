@@ -61,7 +61,7 @@ std::pair<double, double> faceParameters(int face, const Vec3& r) {
 
 }  // namespace
 
-CellAdjacency::CellAdjacency(const std::vector<Prim>& prims) : mSides(prims.size()) {
+CellAdjacency::CellAdjacency(const PrimTable& prims) : mSides(prims.size()) {
     // Every side face keyed by its corners, sorted so that the faces sharing corners are
     // consecutive (a sort rather than a map: a million cells are four million faces).
     struct Side {
@@ -70,9 +70,10 @@ CellAdjacency::CellAdjacency(const std::vector<Prim>& prims) : mSides(prims.size
     };
     std::vector<Side> sides;
     for (std::size_t p = 0; p < prims.size(); ++p) {
-        if (!prims[p].textured) continue;
+        if (!prims.textured(p)) continue;
+        const TrilinearCell cell = prims.cell(p);
         for (int face = 2; face < 6; ++face) {
-            const auto corners = prims[p].cell.faceCorners(face);
+            const auto corners = cell.faceCorners(face);
             if (!hasEqualCorners(corners)) sides.push_back({keyOf(corners), int(p), face});
         }
     }
@@ -89,8 +90,8 @@ CellAdjacency::CellAdjacency(const std::vector<Prim>& prims) : mSides(prims.size
                 CellNeighbour n;
                 n.prim = theirs.prim;
                 n.face = theirs.face;
-                if (findSymmetry(prims[std::size_t(mine.prim)].cell.faceCorners(mine.face),
-                                 prims[std::size_t(theirs.prim)].cell.faceCorners(theirs.face), n))
+                if (findSymmetry(prims.cell(std::size_t(mine.prim)).faceCorners(mine.face),
+                                 prims.cell(std::size_t(theirs.prim)).faceCorners(theirs.face), n))
                     mSides[std::size_t(mine.prim)][std::size_t(mine.face - 2)] = n;
             }
         }

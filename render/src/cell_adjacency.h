@@ -24,7 +24,7 @@ struct CellNeighbour {
 class CellAdjacency {
 public:
     CellAdjacency() = default;
-    explicit CellAdjacency(const std::vector<Prim>& prims);
+    explicit CellAdjacency(const PrimTable& prims);
 
     /// The neighbour across side face `face` (2: u = 0, 3: u = 1, 4: v = 0, 5: v = 1) of
     /// primitive `prim`; prim = −1 when there is none (or `prim` is not a cell).

@@ -129,23 +129,24 @@ private:
 
 }  // namespace
 
-DeformedMesh::DeformedMesh(const std::vector<Prim>& prims, const std::vector<SurfaceRuntime>& surfaces,
+DeformedMesh::DeformedMesh(const PrimTable& prims, const std::vector<SurfaceRuntime>& surfaces,
                            const std::vector<const SourceBvh*>& sources, double tolerance, std::uint64_t maxMemoryBytes,
                            const std::filesystem::path& sceneFile)
     : mSources(sources) {
     std::vector<std::size_t> cells;
     double estimate = 0, lengthSum = 0;
     for (std::size_t i = 0; i < prims.size(); ++i) {
-        const SurfaceRuntime& s = surfaces[std::size_t(prims[i].surface)];
+        const Prim prim = prims[i];
+        const SurfaceRuntime& s = surfaces[std::size_t(prim.surface)];
         if (s.texel < 0) continue;
         cells.push_back(i);
-        lengthSum += prims[i].cell.size();
+        lengthSum += prim.cell.size();
         const SourceBvh& source = *sources[std::size_t(s.texel)];
         const double wraps = double(source.shiftMax()[0] - source.shiftMin()[0] + 1) *
                              double(source.shiftMax()[1] - source.shiftMin()[1] + 1);
         // Every source triangle lands in every copy at least once; the wrapped copies only add
         // the pieces that stick out, so they are not counted in full.
-        const CellTiles tiles(prims[i].map);
+        const CellTiles tiles(prim.map);
         estimate += double(tiles.count()) * double(source.triangleCount()) * (wraps > 1 ? 1.1 : 1.0);
     }
     if (!cells.empty()) mLengthScale = lengthSum / double(cells.size());
@@ -164,7 +165,7 @@ DeformedMesh::DeformedMesh(const std::vector<Prim>& prims, const std::vector<Sur
     std::atomic<bool> over{false};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size()), [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t c = range.begin(); c != range.end() && !over.load(std::memory_order_relaxed); ++c) {
-            const Prim& prim = prims[cells[c]];
+            const Prim prim = prims[cells[c]];
             const SurfaceRuntime& surface = surfaces[std::size_t(prim.surface)];
             const SourceBvh& source = *sources[std::size_t(surface.texel)];
             CellOutput& out = outputs[c];

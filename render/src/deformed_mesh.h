@@ -28,7 +28,7 @@ public:
     /// fraction of its cell's size. Throws vtex::MemoryLimitError naming `sceneFile` when the
     /// triangles would take more than `maxMemoryBytes` (0: no limit): before building when the source triangles
     /// alone exceed it, during subdivision otherwise (nothing large is kept either way).
-    DeformedMesh(const std::vector<Prim>& prims, const std::vector<SurfaceRuntime>& surfaces,
+    DeformedMesh(const PrimTable& prims, const std::vector<SurfaceRuntime>& surfaces,
                  const std::vector<const SourceBvh*>& sources, double tolerance, std::uint64_t maxMemoryBytes,
                  const std::filesystem::path& sceneFile);
     ~DeformedMesh();

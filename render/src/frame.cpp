@@ -51,7 +51,7 @@ void checkTiling(const Scene& scene, std::size_t si, std::size_t k) {
 SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
     checkSceneRange(scene);
     SceneGeometry geometry;
-    std::vector<Prim> prims;
+    PrimTable prims;
     for (std::size_t si = 0; si < scene.surfaces.size(); ++si) {
         const SurfaceDef& def = scene.surfaces[si];
         // One runtime surface per placing (SurfaceDef::placing): the faces of each material or
@@ -71,28 +71,24 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
             geometry.surfaces.push_back(s);
         }
         const auto mesh = loadSurfaceMesh(scene, si);
+        for (std::size_t k = first; k < geometry.surfaces.size(); ++k) {
+            const SurfaceRuntime& s = geometry.surfaces[k];
+            const bool textured = s.texel >= 0;
+            prims.addSurface({mesh, textured && !cellsAsFloors, textured && cellsAsFloors, s.height, s.under, s.placing});
+        }
         const std::vector<std::uint32_t> placings = facePlacings(scene, si, *mesh);
         for (std::size_t f = 0; f < mesh->quads.size(); ++f) {
-            Prim prim;
-            prim.surface = int(first + placings[f]);
-            prim.face = int(f);
-            const SurfaceRuntime& s = geometry.surfaces[std::size_t(prim.surface)];
-            if (!baseFaceCorners(*mesh, f, prim.p, prim.n))
+            const int surface = int(first + placings[f]);
+            const SurfaceRuntime& s = geometry.surfaces[std::size_t(surface)];
+            std::array<Vec3, 4> p, n;
+            if (!baseFaceCorners(*mesh, f, p, n))
                 throw InputError(def.mesh, "face " + std::to_string(f) + " has an invalid corner");
-            for (const Vec3& corner : prim.p)  // the shell's top is within `height` of its corners
+            for (const Vec3& corner : p)  // the shell's top is within `height` of its corners
                 if (!inRange(corner) || !(corner.cwiseAbs().maxCoeff() + std::abs(s.height) <= kMaxSceneCoordinate))
                     throw InputError(def.mesh, "face " + std::to_string(f) + " has a corner (or its shell) beyond ±1e12, "
                                      "the renderers' exact range");
-            if (s.texel >= 0) {
-                prim.cell = TrilinearCell(prim.p, prim.n, s.height, s.under);
-                prim.map = makeCellMap(s.placing, drawFaceTransform(s.placing.perturb, f));
-                ++geometry.cells;
-                if (cellsAsFloors)
-                    prim.p = prim.cell.faceCorners(0);
-                else
-                    prim.textured = true;
-            }
-            prims.push_back(prim);
+            if (s.texel >= 0) ++geometry.cells;
+            prims.add(surface, std::uint32_t(f));
         }
     }
     geometry.faces = prims.size();

@@ -27,6 +27,13 @@ constexpr double kEdgeSlack = 1e-9;
 // see TrilinearCell::faceCorners for the faces' parameters.
 constexpr int kFaceCorners[6][4] = {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 2, 4, 6},
                                     {1, 3, 5, 7}, {0, 1, 4, 5}, {2, 3, 6, 7}};
+
+// (p10 − p00) × (p01 − p11) of face `face` (TrilinearCell::faceTwist), inlined into cellSpans.
+[[gnu::always_inline]] inline Vec3 twistOf(const std::array<Vec3, 8>& c, int face) {
+    const auto& k = kFaceCorners[std::size_t(face)];
+    return (c[k[1]] - c[k[0]]).cross(c[k[2]] - c[k[3]]);
+}
+
 // The index in (u, v, w) of the coordinate each face holds fixed.
 constexpr int kFaceCoordinate[6] = {2, 2, 0, 0, 1, 1};
 
@@ -139,12 +146,18 @@ TrilinearCell::TrilinearCell(const std::array<Vec3, 4>& positions, const std::ar
         mCorners[i] = positions[i] + w0 * height * normals[i];
         mCorners[i + 4] = positions[i] + (w0 + 1) * height * normals[i];
     }
+}
+
+Vec3 TrilinearCell::faceTwist(int face) const { return twistOf(mCorners, face); }
+
+double TrilinearCell::size() const {
+    // Computed when asked, not kept: cells are rebuilt for every ray that meets them
+    // (prim_table.h), and most of those never ask. The largest squared distance, then one root
+    // (the same as the largest root: it is monotonic and correctly rounded).
+    double size2 = 0;
     for (int i = 0; i < 8; ++i)
-        for (int j = i + 1; j < 8; ++j) mSize = std::max(mSize, (mCorners[i] - mCorners[j]).norm());
-    for (int face = 0; face < 6; ++face) {
-        const auto& k = kFaceCorners[face];
-        mTwist[face] = (mCorners[k[1]] - mCorners[k[0]]).cross(mCorners[k[2]] - mCorners[k[3]]);
-    }
+        for (int j = i + 1; j < 8; ++j) size2 = std::max(size2, (mCorners[i] - mCorners[j]).squaredNorm());
+    return std::sqrt(size2);
 }
 
 Vec3 TrilinearCell::map(const Vec3& r) const {
@@ -193,7 +206,7 @@ Vec3 TrilinearCell::faceToCell(int face, double a, double b) {
 
 std::optional<Vec3> TrilinearCell::inverse(const Vec3& x, const Vec3& guess, double tolerance,
                                            double slack) const {
-    const double target = tolerance * std::max(mSize, std::numeric_limits<double>::min());
+    const double target = tolerance * std::max(size(), std::numeric_limits<double>::min());
     // Newton from one start; damped (the step is halved until the residual decreases) so that a
     // start in a fold does not jump out of the cell and diverge.
     const auto newton = [&](Vec3 r, bool damped) -> std::pair<Vec3, double> {
@@ -257,9 +270,9 @@ int cellSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::arra
     }
     for (int face = 0; face < 6; ++face) {
         const auto& k = kFaceCorners[face];
+        const Vec3 twist = twistOf(corner, face);
         const PatchView view{q[k[0]], qxd[k[0]], qxd[k[1]], corner[k[1]] - corner[k[0]],
-                             corner[k[2]] - corner[k[0]], corner[k[3]] - corner[k[1]],
-                             cell.faceTwist(face)};
+                             corner[k[2]] - corner[k[0]], corner[k[3]] - corner[k[1]], twist};
         std::array<PatchHit, 2> hits;
         const int count =
             intersectPatch(view, d, 0.0, std::numeric_limits<double>::infinity(), hits);

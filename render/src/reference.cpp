@@ -166,7 +166,7 @@ private:
     Color shadeSource(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rt, const detail::SourceHit& hit,
                       const Vec3& d, Counters& counters) const {
         const detail::SourcePoint p = detail::sourcePoint(prim, rt, hit.normal, d);
-        const int primIndex = int(&prim - mTracer.prims().data());
+        const int primIndex = prim.index;
         const SourceRuntime& source = mSources[std::size_t(surface.texel)];
         return detail::shadePhong(mLights, p.world, p.normal, p.normal, -d, source.material, hit.albedo, p.scale,
                                   [&](const Vec3& origin, const Vec3& l, double distance) {

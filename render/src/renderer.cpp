@@ -162,17 +162,17 @@ private:
         const double scale = std::min(surface.height, patchSize(prim));
         // The hint, just above the floor where the lattice's near march starts inside the cell,
         // is what lets a query use the lattice.
-        const int hintPrim = seenThrough < mOptions.approximations.exactFloorShadowAbove ? int(&prim - mTracer.prims().data()) : -1;
-        return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters, hintPrim, Vec3(r.x(), r.y(), 1e-4));
+        const Prim* hint = seenThrough < mOptions.approximations.exactFloorShadowAbove ? &prim : nullptr;
+        return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters, hint, Vec3(r.x(), r.y(), 1e-4));
     }
 
-    // An opaque surface point; its shadow queries start in cell `hintPrim` at `hintR` when that
-    // is given (see shadowTransmittance).
+    // An opaque surface point; its shadow queries start in cell `hint` at `hintR` when that is
+    // given (see shadowTransmittance).
     Color shadeSurface(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& view, const Material& m, double scale,
-                       double t, Counters& counters, int hintPrim = -1, const Vec3& hintR = Vec3::Zero()) const {
+                       double t, Counters& counters, const Prim* hint = nullptr, const Vec3& hintR = Vec3::Zero()) const {
         return detail::shadePhong(mScene.lights, x, n, ng, view, m, Color::Ones(), scale,
                                   [&](const Vec3& origin, const Vec3& l, double distance) {
-                                      return mShadows.shadowTransmittance(origin, l, distance, mConeSpread * t, hintPrim, hintR, counters);
+                                      return mShadows.shadowTransmittance(origin, l, distance, mConeSpread * t, hint, hintR, counters);
                                   });
     }
 
@@ -182,7 +182,7 @@ private:
     void marchSpan(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, double tIn,
                    double tOut, const Vec3& d, PathState& state, Counters& counters) const {
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
-        const int primIndex = int(&prim - mTracer.prims().data());
+        const int primIndex = prim.index;
         const double tMid = 0.5 * (tIn + tOut);
         const double scale = localScale(prim, 0.5 * (rIn + rOut));
         const int maxLevel = texel.volume->maxLevel();
@@ -250,7 +250,7 @@ private:
         const auto hit = texel.source->intersect(p0, p1, 0);
         if (!hit) return {};
         const detail::SourcePoint p = detail::sourcePoint(prim, p0 + hit->s * (p1 - p0), hit->normal, d);
-        const int primIndex = int(&prim - mTracer.prims().data());
+        const int primIndex = prim.index;
         const double t = tIn + hit->s * (tOut - tIn);
         const Color radiance = detail::shadePhong(
             mScene.lights, p.world, p.normal, p.normal, -d, texel.material, hit->albedo, p.scale,

@@ -37,10 +37,12 @@ public:
     // Transmittance from o toward the light along the unit direction l, up to tMax: opaque
     // faces and cell floors block, texel cells attenuate at the level of the cone `width`
     // (world units, held constant along the shadow ray).
-    double shadowTransmittance(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim,
+    // `hint`: the cell o lies in, at cell coordinates hintR, when the caller knows it.
+    double shadowTransmittance(const Vec3& o, const Vec3& l, double tMax, double width, const Prim* hint,
                                const Vec3& hintR, Counters& counters) const {
+        const int hintPrim = hint ? hint->index : -1;
         if (const int slot = latticeSlot(l, tMax, hintPrim); slot >= 0)
-            return nearAndCachedShadow(slot, hintPrim, hintR, l, width, counters);
+            return nearAndCachedShadow(slot, *hint, hintR, l, width, counters);
         return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters);
     }
 
@@ -70,10 +72,10 @@ public:
         Vec3 light;  ///< unit, tiled reference space
         double scale;  ///< the local scale at the span's middle
     };
-    double nearAndCachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, double width,
+    double nearAndCachedShadow(int slot, const Prim& prim, const Vec3& r, const Vec3& l, double width,
                                Counters& counters, const SpanFrame* span = nullptr) const {
         ++counters.shadow;
-        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+        const int primIndex = prim.index;
         const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
         Vec3 lr;
@@ -82,7 +84,7 @@ public:
         } else {
             lr = tiledJacobian(prim, r).inverse() * l;
             const double len = lr.norm();
-            if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l);
+            if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l, 0, &prim);
             lr /= len;
         }
         const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim, r)));
@@ -90,17 +92,22 @@ public:
                                            kExactLatticeSteps / double(mLightCache.grid(primIndex).nw), level);
         counters.voxels += near.blocks;
         if (near.exitFace == 0 || near.transmittance <= kTransmittanceCutoff) return 0;
-        return near.transmittance * cachedShadow(slot, primIndex, near.end, l);
+        return near.transmittance * cachedShadow(slot, primIndex, near.end, l, 0, &prim);
     }
 
     // The lattice's value at cell coordinates r of primitive `primIndex`. Node values are shared
     // by all pixels, so their work is not counted in any tile's statistics (which would then
     // depend on which tile came first). `depth`: how many cells a node's chain has crossed.
-    double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, int depth = 0) const {
+    // `known`: the primitive, when the caller has it; otherwise it is put together only if a
+    // node is missing (prim_table.h).
+    double cachedShadow(int slot, int primIndex, const Vec3& r, const Vec3& l, int depth = 0,
+                        const Prim* known = nullptr) const {
+        std::optional<Prim> built;
         return mLightCache.lookup(slot, primIndex, r, [&](const Vec3& node) {
+            if (!known) known = &built.emplace(mTracer.prims()[std::size_t(primIndex)]);
             // Nodes on the cell's faces move in by a hair, so that the ray starts inside.
             const Vec3 rn = node.cwiseMax(Vec3::Constant(1e-4)).cwiseMin(Vec3::Constant(1 - 1e-4));
-            return nodeTransmittance(slot, primIndex, rn, l, depth);
+            return nodeTransmittance(slot, *known, rn, l, depth);
         });
     }
 
@@ -117,8 +124,8 @@ public:
     // is off take the exact ray from the node itself. Which node of a chain that long gets the
     // exact ray depends on where the chain began, so only there could an image depend on the
     // order of the tiles (a node's value is otherwise a function of the node alone).
-    double nodeTransmittance(int slot, int primIndex, const Vec3& rn, const Vec3& l, int depth) const {
-        const Prim& prim = mTracer.prims()[std::size_t(primIndex)];
+    double nodeTransmittance(int slot, const Prim& prim, const Vec3& rn, const Vec3& l, int depth) const {
+        const int primIndex = prim.index;
         const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
         const double spacing = 1.0 / double(mLightCache.grid(primIndex).nw);
@@ -246,11 +253,11 @@ private:
         double total = 0;
         if (!directions.empty())
             for (std::size_t i = 0; i < grids.size(); ++i) {
-                const Prim& prim = mTracer.prims()[i];
-                if (!prim.textured) continue;
+                if (!mTracer.prims().textured(i)) continue;
                 // Tiles of the texel along the cell's u and v: the lengths of the CellMap's columns.
                 const auto across = [&](double tiles) { return n * int(std::clamp(std::ceil(tiles), 1.0, 4.0)); };
-                grids[i] = {across(prim.map.a.col(0).norm()), across(prim.map.a.col(1).norm()), n};
+                const CellMap map = mTracer.prims().map(i);
+                grids[i] = {across(map.a.col(0).norm()), across(map.a.col(1).norm()), n};
                 total += double(grids[i].nodes()) * double(directions.size());
             }
         if (total > LightTransmittanceCache::kMaxNodes) return {};

@@ -151,9 +151,9 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                         const Vec3 rc = cellPoint();
                         if (sl.latticeSlot >= 0) {
                             const ShadowQueries::SpanFrame frame{sl.lr, span.scale};
-                            ml.shadow = mShadows.nearAndCachedShadow(sl.latticeSlot, span.primIndex, rc, lw, width, counters, &frame);
+                            ml.shadow = mShadows.nearAndCachedShadow(sl.latticeSlot, span.prim, rc, lw, width, counters, &frame);
                         } else {
-                            ml.shadow = mShadows.shadowTransmittance(worldPoint(), lw, distance, width, span.primIndex, rc, counters);
+                            ml.shadow = mShadows.shadowTransmittance(worldPoint(), lw, distance, width, &span.prim, rc, counters);
                         }
                         if (record && track.count < SpanContext::kTrackCapacity) {
                             track.s[std::size_t(track.count)] = sm;

@@ -21,7 +21,7 @@ namespace {
 
 struct TraceContext {
     RTCIntersectContext context;  // first member: Embree hands back a pointer to it
-    const std::vector<Prim>* prims;
+    const PrimTable* prims;
     Vec3 o, d;
     double tNear;
     double tBest;
@@ -30,22 +30,20 @@ struct TraceContext {
 };
 
 void boundsFunction(const RTCBoundsFunctionArguments* args) {
-    const auto& prims = *static_cast<const std::vector<Prim>*>(args->geometryUserPtr);
-    const Prim& prim = prims[args->primID];
+    const auto& prims = *static_cast<const PrimTable*>(args->geometryUserPtr);
     Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    const auto include = [&](const auto& corners) {
+        for (const Vec3& c : corners) {
+            lo = lo.cwiseMin(c);
+            hi = hi.cwiseMax(c);
+        }
+    };
     // A bilinear patch lies in the convex hull of its corners, a trilinear cell in that of its
     // eight corners.
-    if (prim.textured) {
-        for (const Vec3& c : prim.cell.corners()) {
-            lo = lo.cwiseMin(c);
-            hi = hi.cwiseMax(c);
-        }
-    } else {
-        for (const Vec3& c : prim.p) {
-            lo = lo.cwiseMin(c);
-            hi = hi.cwiseMax(c);
-        }
-    }
+    if (prims.textured(args->primID))
+        include(prims.cell(args->primID).corners());
+    else
+        include(prims.patch(args->primID));
     // Pad for the float rounding of the box and of the ray Embree traverses with.
     const double pad = 1e-6 * (lo.cwiseAbs().maxCoeff() + hi.cwiseAbs().maxCoeff() + (hi - lo).maxCoeff()) + 1e-30;
     RTCBounds* b = args->bounds_o;
@@ -60,13 +58,13 @@ void boundsFunction(const RTCBoundsFunctionArguments* args) {
 void intersectFunction(const RTCIntersectFunctionNArguments* args) {
     if (!args->valid[0]) return;
     auto* ctx = reinterpret_cast<TraceContext*>(args->context);
-    const Prim& prim = (*ctx->prims)[args->primID];
+    const PrimTable& prims = *ctx->prims;
     auto* rayhit = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N = 1: rtcIntersect1 only
     Hit hit;
     hit.prim = int(args->primID);
-    if (!prim.textured) {
-        const auto h = intersectBilinearPatch(ctx->o, ctx->d, prim.p[0], prim.p[1], prim.p[2], prim.p[3],
-                                              ctx->tNear, ctx->tBest);
+    if (!prims.textured(args->primID)) {
+        const auto p = prims.patch(args->primID);
+        const auto h = intersectBilinearPatch(ctx->o, ctx->d, p[0], p[1], p[2], p[3], ctx->tNear, ctx->tBest);
         if (!h) return;
         hit.t = h->t;
         hit.u = h->u;
@@ -84,14 +82,14 @@ void intersectFunction(const RTCIntersectFunctionNArguments* args) {
                 }
             if (!spansPtr) {
                 const std::size_t slot = std::size_t(cache->next);
-                cache->count[slot] = count = cellSpans(prim.cell, ctx->o, ctx->d, cache->spans[slot]);
+                cache->count[slot] = count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, cache->spans[slot]);
                 cache->prim[slot] = int(args->primID);
                 spansPtr = &cache->spans[slot];
                 cache->next = (cache->next + 1) % SpanCache::kSize;
                 cache->used = std::min(cache->used + 1, SpanCache::kSize);
             }
         } else {
-            count = cellSpans(prim.cell, ctx->o, ctx->d, local);
+            count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, local);
             spansPtr = &local;
         }
         const std::array<CellSpan, 4>& spans = *spansPtr;
@@ -127,7 +125,7 @@ void errorFunction(void*, RTCError code, const char* message) {
 
 }  // namespace
 
-Tracer::Tracer(std::vector<Prim> prims) : mPrims(std::move(prims)) {
+Tracer::Tracer(PrimTable prims) : mPrims(std::move(prims)) {
     RTCDevice device = rtcNewDevice(nullptr);
     if (!device) throw std::runtime_error("Embree: cannot create a device");
     rtcSetDeviceErrorFunction(device, errorFunction, nullptr);

@@ -2,7 +2,8 @@
 // double precision behind Embree's float BVH). Embree types stay in tracer.cpp.
 #pragma once
 
-#include <vtex/render/cell_map.h>
+#include "prim_table.h"
+
 #include <vtex/render/geometry.h>
 
 #include <array>
@@ -11,16 +12,6 @@
 #include <vector>
 
 namespace vtex::render::detail {
-
-struct Prim {
-    int surface = 0;
-    int face = 0;
-    bool textured = false;
-    std::array<Vec3, 4> p;  ///< corners p00, p10, p01, p11 (world)
-    std::array<Vec3, 4> n;  ///< unit shading normals at the corners
-    TrilinearCell cell;     ///< textured faces only
-    CellMap map;            ///< textured faces: cell → tiled reference coordinates (cell_map.h)
-};
 
 struct Hit {
     int prim = -1;
@@ -43,7 +34,7 @@ struct SpanCache {
 
 class Tracer {
 public:
-    explicit Tracer(std::vector<Prim> prims);
+    explicit Tracer(PrimTable prims);
     ~Tracer();
     Tracer(const Tracer&) = delete;
     Tracer& operator=(const Tracer&) = delete;
@@ -54,10 +45,10 @@ public:
                              double tFar = std::numeric_limits<double>::infinity(),
                              SpanCache* cache = nullptr) const;
 
-    const std::vector<Prim>& prims() const { return mPrims; }
+    const PrimTable& prims() const { return mPrims; }
 
 private:
-    std::vector<Prim> mPrims;
+    PrimTable mPrims;
     void* mDevice = nullptr;
     void* mScene = nullptr;
 };

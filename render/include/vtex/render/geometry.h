@@ -50,7 +50,10 @@ std::optional<PatchHit> intersectBilinearPatch(const Vec3& o, const Vec3& d, con
 /// (u = i, v = j): corners[0] = P00, [1] = P10, [2] = P01, [3] = P11.
 class TrilinearCell {
 public:
-    TrilinearCell() = default;
+    /// The point cell at the origin.
+    TrilinearCell() {
+        mCorners.fill(Vec3::Zero());
+    }
     /// `normals` need not be unit (they are used as given); `height` is H in world units;
     /// `under` puts the shell below the face (X(u,v,1) is the face itself).
     TrilinearCell(const std::array<Vec3, 4>& positions, const std::array<Vec3, 4>& normals,
@@ -62,8 +65,9 @@ public:
     Mat3 jacobian(const Vec3& r) const;
     /// The world corners of the cell: index i + 2j + 4k for (u=i, v=j, w=k).
     const std::array<Vec3, 8>& corners() const { return mCorners; }
-    /// A length scale of the cell: the largest distance between two of its corners.
-    double size() const { return mSize; }
+    /// A length scale of the cell: the largest distance between two of its corners (computed on
+    /// each call).
+    double size() const;
 
     /// The four corners of face `face` (0: w=0, 1: w=1, 2: u=0, 3: u=1, 4: v=0, 5: v=1) in the
     /// order p00, p10, p01, p11 of its own parameters (a, b): (u,v) on w-faces, (v,w) on
@@ -72,8 +76,8 @@ public:
     /// Cell coordinates of the point (a, b) of face `face`.
     static Vec3 faceToCell(int face, double a, double b);
     /// (p10 − p00) × (p01 − p11) of face `face`'s corners: the u² coefficient vector of the ray
-    /// test against it, kept per cell because it depends on the cell alone.
-    const Vec3& faceTwist(int face) const { return mTwist[std::size_t(face)]; }
+    /// test against it.
+    Vec3 faceTwist(int face) const;
 
     /// Inverts the map: the cell coordinates r with X(r) = x, by Newton's method with the
     /// analytic Jacobian started at `guess`, then (if that fails) from a 3×3×3 grid of starts
@@ -85,8 +89,6 @@ public:
 
 private:
     std::array<Vec3, 8> mCorners;
-    std::array<Vec3, 6> mTwist;
-    double mSize = 0;
 };
 
 /// An interval [tIn, tOut] of a ray inside a cell, with where it enters and leaves.

@@ -1,0 +1,65 @@
+// See prim_table.h.
+#include "prim_table.h"
+
+
+namespace vtex::render::detail {
+namespace {
+
+// ingest::patchCorners without its checks, which buildSceneGeometry made when it added the face:
+// this runs for every ray that meets a cell.
+void corners(const ingest::QuadMesh& mesh, std::uint32_t face, std::array<Vec3, 4>& p, std::array<Vec3, 4>& n) {
+    const auto& q = mesh.quads[face];
+    const std::uint32_t order[4] = {q[0], q[1], q[3], q[2]};
+    for (std::size_t c = 0; c < 4; ++c) {
+        p[c] = mesh.positions[order[c]].cast<double>();
+        n[c] = order[c] < mesh.normals.size() ? mesh.normals[order[c]].cast<double>() : Vec3(0, 0, 1);
+    }
+}
+
+}  // namespace
+
+int PrimTable::addSurface(Surface surface) {
+    mSurfaces.push_back(std::move(surface));
+    return int(mSurfaces.size() - 1);
+}
+
+Prim PrimTable::operator[](std::size_t i) const {
+    const Face& f = mFaces[i];
+    const Surface& s = mSurfaces[f.surface];
+    Prim prim;
+    prim.index = int(i);
+    prim.surface = int(f.surface);
+    prim.face = int(f.face);
+    corners(*s.mesh, f.face, prim.p, prim.n);
+    if (s.cell || s.floor) {
+        prim.cell = TrilinearCell(prim.p, prim.n, s.height, s.under);
+        prim.map = makeCellMap(s.placing, drawFaceTransform(s.placing.perturb, f.face));
+        if (s.floor) prim.p = prim.cell.faceCorners(0);
+        prim.textured = s.cell;
+    }
+    return prim;
+}
+
+TrilinearCell PrimTable::cell(std::size_t i) const {
+    const Face& f = mFaces[i];
+    const Surface& s = mSurfaces[f.surface];
+    std::array<Vec3, 4> p, n;
+    corners(*s.mesh, f.face, p, n);
+    return TrilinearCell(p, n, s.height, s.under);
+}
+
+std::array<Vec3, 4> PrimTable::patch(std::size_t i) const {
+    const Face& f = mFaces[i];
+    const Surface& s = mSurfaces[f.surface];
+    std::array<Vec3, 4> p, n;
+    corners(*s.mesh, f.face, p, n);
+    return s.floor ? TrilinearCell(p, n, s.height, s.under).faceCorners(0) : p;
+}
+
+CellMap PrimTable::map(std::size_t i) const {
+    const Face& f = mFaces[i];
+    const Surface& s = mSurfaces[f.surface];
+    return makeCellMap(s.placing, drawFaceTransform(s.placing.perturb, f.face));
+}
+
+}  // namespace vtex::render::detail

@@ -1,0 +1,71 @@
+// The scene's primitives, one per base face, stored as what they are made from (a face of a base
+// mesh and the surface placing it), and put together on demand: a face's corners, normals,
+// trilinear cell and cell map take ~600 bytes in double precision, which a million faces cannot
+// afford (issue 18: a 10⁶-face base mesh within 300 MB), while rebuilding them costs a few dozen
+// operations, next to the six patch tests of a ray entering a cell.
+#pragma once
+
+#include <vtex/ingest/base_mesh.h>
+#include <vtex/render/cell_map.h>
+#include <vtex/render/geometry.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace vtex::render::detail {
+
+/// A base face as the renderers use it, put together by PrimTable (by value: it lives as long as
+/// the caller keeps it).
+struct Prim {
+    int index = -1;    ///< in its PrimTable
+    int surface = 0;   ///< SceneGeometry::surfaces
+    int face = 0;      ///< in its base mesh
+    bool textured = false;
+    std::array<Vec3, 4> p;  ///< corners p00, p10, p01, p11 (world)
+    std::array<Vec3, 4> n;  ///< unit shading normals at the corners
+    TrilinearCell cell;     ///< textured faces only
+    CellMap map;            ///< textured faces: cell → tiled reference coordinates (cell_map.h)
+};
+
+class PrimTable {
+public:
+    /// What a surface placing gives its faces: the base mesh, and for a textured placing its
+    /// shell (height, under) and map (placing). `cell`: its faces are texel cells; otherwise
+    /// plain patches (with `floor`, the patch of the cell's floor w = 0, for a placing with a
+    /// texel drawn by other means).
+    struct Surface {
+        std::shared_ptr<const ingest::QuadMesh> mesh;
+        bool cell = false, floor = false;
+        double height = 0;
+        bool under = false;
+        TexelPlacing placing;
+    };
+
+    /// Adds a surface placing; returns its index, which add() takes.
+    int addSurface(Surface surface);
+    /// Adds face `face` of surface `surface`'s mesh (its corners checked by the caller).
+    void add(int surface, std::uint32_t face) { mFaces.push_back({std::uint32_t(surface), face}); }
+
+    std::size_t size() const { return mFaces.size(); }
+    bool empty() const { return mFaces.empty(); }
+    /// Primitive i, whole.
+    Prim operator[](std::size_t i) const;
+    /// What a ray test needs, without the rest: whether primitive i is a cell, its cell (cells
+    /// only), its patch corners p00, p10, p01, p11 (plain patches only).
+    bool textured(std::size_t i) const { return mSurfaces[mFaces[i].surface].cell; }
+    TrilinearCell cell(std::size_t i) const;
+    std::array<Vec3, 4> patch(std::size_t i) const;
+    /// Its cell map (cells only).
+    CellMap map(std::size_t i) const;
+
+private:
+    struct Face {
+        std::uint32_t surface, face;
+    };
+    std::vector<Surface> mSurfaces;
+    std::vector<Face> mFaces;
+};
+
+}  // namespace vtex::render::detail
