@@ -204,7 +204,7 @@ std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& option
     double bytes = double(std::max(w, 0)) * double(std::max(h, 0)) * (options.aovs ? 30.0 : 22.0) + double(16 << 20);
     std::vector<bool> used(scene.texels.size(), false);
     for (const SurfaceDef& s : scene.surfaces) {
-        if (!s.meshData) bytes += 32 * fileBytes(s.mesh);
+        if (!s.meshData) bytes += 10 * fileBytes(s.mesh);
     }
     for (const std::size_t t : usedTexels(scene))
         if (t < used.size()) used[t] = true;

@@ -156,12 +156,13 @@ struct RenderResult {
 
 /// An upper estimate of renderScene's peak memory (bytes), before anything is loaded: 16 MiB, the
 /// image (22 bytes a pixel, 30 with AOVs: the RGBA floats and the encoders' copies), what the
-/// scene loads, from its files' sizes without reading them (base meshes 32× their file, octrees
+/// scene loads, from its files' sizes without reading them (base meshes 10× their file, octrees
 /// and source meshes 3×), and the shadow lattices' cap (256 MiB) when a texel meets a
 /// directional light. `bench/memory_estimates.py build/apps/vtex/vtex /tmp/mem` measured (at
 /// 1c31985, docs/render.md "Memory") 20.1 and 28.2 bytes a pixel on a 4096² render with its
 /// PNG (hence 22 and 30: at 20 and 28 the 4096² render with --aov peaked 0.4 MiB above the
-/// estimate), 18.8× for an OBJ grid, 1.9× for the bush's octree and mesh.
+/// estimate), 1.9× for the bush's octree and mesh; and (at 1123520, primitives built on demand)
+/// 6.0× for an OBJ grid, 6.5× for the same grid as binary PLY (fewer bytes a face).
 /// tests/cli/memory_limit_test.cpp checks it against measured peaks.
 std::uint64_t estimateRenderMemory(const Scene& scene, const RenderOptions& options);
 
