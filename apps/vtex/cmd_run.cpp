@@ -1,5 +1,6 @@
-// `vtex run pipeline.toml [-o DIR] [--force] [--jobs N] [--dry-run] [--strict]`: a staged batch
-// run with caching, its progress drawn on a terminal (run_progress.h).
+// `vtex run pipeline.toml [-o DIR] [--force] [--jobs N] [--dry-run] [--strict] [--stage ID]`: a
+// staged batch run with caching, its progress drawn on a terminal (run_progress.h); or one stage
+// of it alone, its inputs from the cache (what a cluster job runs).
 #include "cli.h"
 #include "run_progress.h"
 
@@ -35,6 +36,7 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         bool wait = false;
         bool dryRun = false;
         bool strict = false;
+        std::string stage;
     };
     auto o = std::make_shared<Options>();
     app.add_option("PIPELINE", o->file, "The pipeline file (.toml)")->required();
@@ -48,6 +50,10 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
                  "List the stages that would run and why (changed input, changed parameter, missing output); run "
                  "nothing, leave every file as it is");
     app.add_flag("--strict", o->strict, "Refuse a pipeline file with an unknown key (exit 2) instead of warning");
+    app.add_option("--stage", o->stage,
+                   "Run only this stage, KIND/NAME as the log names it (render/fur), its inputs taken from the cache "
+                   "(exit 3 when one is not there), with the result it has in a whole run; no report is written")
+        ->excludes("--dry-run");
     return [o](const GlobalOptions& global) {
         const ThreadLimit threadLimit(o->threads);
         const pipelines::Pipeline pipeline = pipelines::loadPipeline(o->file);
@@ -63,16 +69,22 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         options.jobs = o->jobs;
         options.maxMemoryBytes = o->maxMemory;
         options.waitForLock = o->wait;
+        options.stage = o->stage;
         if (o->dryRun) return printPlan(pipelines::planPipeline(pipeline, options));
         pipelines::RunReport report;
         {
             RunProgressDisplay display(global, o->jobs);  // gone before the closing lines are printed
             options.log = display.logger();
-            if (display.enabled()) options.observer = &display;
-            report = pipelines::runPipeline(pipeline, options);
+            // The display draws a whole run's plan; a stage alone logs its lines only.
+            if (display.enabled() && o->stage.empty()) options.observer = &display;
+            try {
+                report = pipelines::runPipeline(pipeline, options);
+            } catch (const pipelines::UnknownStage& e) {
+                throw CLI::ValidationError("--stage", e.what());
+            }
         }
         for (const auto& omission : report.leftOut) status(global, "left out: texel " + omission.texel + ": " + omission.reason);
-        status(global, "report: " + report.reportHtml.string());
+        if (!report.reportHtml.empty()) status(global, "report: " + report.reportHtml.string());
         if (!report.succeeded()) {
             // Exit 3 when a stage failed on bad input (a mesh, a scene, an estimate over the memory
             // limit), 1 otherwise; the message is the first failure's.

@@ -287,6 +287,40 @@ void runStage(std::vector<Stage>& stages, std::size_t i, const fs::path& root, c
     }
 }
 
+// RunOptions::stage: the stage it names.
+std::size_t findStage(const std::vector<Stage>& stages, const std::string& id) {
+    std::string known;
+    for (std::size_t i = 0; i < stages.size(); ++i) {
+        const std::string each = stageId(stages[i].kind, stages[i].name);
+        if (each == id) return i;
+        known += (known.empty() ? "" : ", ") + each;
+    }
+    throw UnknownStage("no stage '" + id + "' in the pipeline (its stages: " + known + ")");
+}
+
+// Before `target` runs alone: every stage it depends on, directly or not, must be up to date in
+// the cache, as a whole run would find it. Their output hashes, which the target's key includes,
+// are read from their manifests; the first that is not throws vtex::InputError naming it.
+void takeInputsFromCache(std::vector<Stage>& stages, std::size_t target, const fs::path& root, const fs::path& file) {
+    std::vector<bool> needed(stages.size(), false);
+    needed[target] = true;
+    for (std::size_t j = target + 1; j-- > 0;)  // a stage's inputs come before it (waves)
+        if (needed[j])
+            for (std::size_t input : stages[j].inputs) needed[input] = true;
+    for (std::size_t i = 0; i < target; ++i) {
+        if (!needed[i]) continue;
+        Stage& stage = stages[i];
+        const std::string description = stage.describe();
+        stage.record.key = hashBytes(description);
+        const std::string why = staleReason(stage, root, description);
+        if (!why.empty())
+            throw InputError(file, "stage '" + stageId(stage.kind, stage.name) + "', an input of '" +
+                                       stageId(stages[target].kind, stages[target].name) + "', is not in the cache (" +
+                                       why + "): run it first, or the whole pipeline");
+        stage.record.status = Status::Cached;
+    }
+}
+
 }  // namespace
 
 RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
@@ -307,15 +341,23 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     MemoryBudget budget(options.maxMemoryBytes);
     std::vector<Stage> stages;
     detail::buildStageGraph(pipeline, root, options.force, budget, stages, report.leftOut);
+    const std::size_t alone = options.stage.empty() ? stages.size() : findStage(stages, options.stage);
 
     createFolder(root);
     // One run per output folder (folder_lock.h): held until this run returns.
     const FolderLock lock(root, options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse);
     prepareFolders(root);
+    MemoryMonitor memory;
+    if (alone < stages.size()) {
+        takeInputsFromCache(stages, alone, root, pipeline.file);
+        runStage(stages, alone, root, options, memory, log);
+        report.stages.push_back(stages[alone].record);
+        report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return report;
+    }
     // The plan for the progress display, made under the lock (no other run changes the cache).
     if (options.observer) options.observer->planned(plan(stages, root, options.force));
 
-    MemoryMonitor memory;
     // Run wave by wave; a wave is a run of stages of one kind.
     tbb::task_arena arena(options.jobs > 0 ? options.jobs : tbb::task_arena::automatic);
     std::size_t first = 0;

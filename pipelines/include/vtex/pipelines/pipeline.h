@@ -22,6 +22,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -118,6 +119,11 @@ struct RunOptions {
     std::uint64_t maxMemoryBytes = 0;
     /// Another run holds the output folder (core's FolderLock): wait for it instead of failing.
     bool waitForLock = false;
+    /// Run only this stage ("kind/name", as stageId names it: "render/fur"), its inputs taken
+    /// from the cache, with the outputs and manifest it makes inside a whole run; what one job
+    /// of a cluster runs. An unknown id throws UnknownStage; an input not in the cache,
+    /// vtex::InputError naming it. No report is written (the whole run's stays).
+    std::string stage;
     /// One line per stage event ("run     render a (changed parameter: spp 1 → 4)", "ran     render
     /// a in 1.52 s, peak 210 MiB", "cached  …", "failed  …"); may be empty. Called one line at a time.
     std::function<void(const std::string&)> log;
@@ -144,6 +150,14 @@ struct StageRecord {
 struct Omission {
     std::string texel;
     std::string reason;  ///< e.g. "sampled at 32³ instead of 128³: the finest level …"
+};
+
+/// A stage's id, "kind/name" (RunOptions::stage).
+inline std::string stageId(const std::string& kind, const std::string& name) { return kind + "/" + name; }
+
+/// RunOptions::stage names no stage of the pipeline; what() lists those it has.
+struct UnknownStage : std::invalid_argument {
+    using std::invalid_argument::invalid_argument;
 };
 
 /// "ran", "cached", "failed" or "skipped": the word the log and the reports use.
