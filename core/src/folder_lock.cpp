@@ -29,12 +29,13 @@ std::string FolderLock::holderName() {
     return std::string(host) + ":" + std::to_string(::getpid());
 }
 
-FolderLock::FolderLock(const std::filesystem::path& folder, Mode mode) {
-    const std::filesystem::path file = folder / ".vtex.lock";
+FolderLock::FolderLock(const std::filesystem::path& folder, Mode mode, Access access, const std::string& name) {
+    const std::filesystem::path file = folder / name;
     mFd = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
     if (mFd < 0) throw IoError(file, std::string("cannot open the folder's lock: ") + std::strerror(errno));
+    const int operation = (access == Access::Shared ? LOCK_SH : LOCK_EX) | (mode == Mode::Wait ? 0 : LOCK_NB);
     int status;
-    while ((status = ::flock(mFd, mode == Mode::Wait ? LOCK_EX : LOCK_EX | LOCK_NB)) != 0 && errno == EINTR) {
+    while ((status = ::flock(mFd, operation)) != 0 && errno == EINTR) {
     }
     if (status != 0) {
         const int error = errno;

@@ -186,10 +186,13 @@ void createFolder(const fs::path& folder) {
     if (error) throw IoError(folder, "cannot create the output directory: " + error.message());
 }
 
-// With the folder's lock held: the stages' folders, cleared of a killed run's temporaries.
-void prepareFolders(const fs::path& root) {
+// With the folder's lock held: the stages' folders, cleared of a killed run's temporaries when
+// the lock is this run's alone (`removeTemporaries`; a stage run alone shares it with the other
+// stages of its submission, whose temporaries are theirs).
+void prepareFolders(const fs::path& root, bool removeTemporaries) {
     for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
         createFolder(root / folder);
+        if (!removeTemporaries) continue;
         // A killed run leaves the hidden temporaries of AtomicOutputFile behind; holding the
         // folder's lock, this run knows no other run writes them, so they can go.
         std::error_code error;
@@ -344,11 +347,15 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     const std::size_t alone = options.stage.empty() ? stages.size() : findStage(stages, options.stage);
 
     createFolder(root);
-    // One run per output folder (folder_lock.h): held until this run returns.
-    const FolderLock lock(root, options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse);
-    prepareFolders(root);
+    // One run per output folder (folder_lock.h), held until this run returns; a stage alone
+    // shares it with the other stages of a cluster submission and holds its own stage's.
+    const FolderLock::Mode mode = options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse;
+    const FolderLock lock(root, mode, alone < stages.size() ? FolderLock::Access::Shared : FolderLock::Access::Exclusive);
+    prepareFolders(root, alone == stages.size());
     MemoryMonitor memory;
     if (alone < stages.size()) {
+        const Stage& stage = stages[alone];
+        const FolderLock stageLock(root / (stage.kind + "s"), mode, FolderLock::Access::Exclusive, "." + stage.name + ".lock");
         takeInputsFromCache(stages, alone, root, pipeline.file);
         runStage(stages, alone, root, options, memory, log);
         report.stages.push_back(stages[alone].record);

@@ -18,10 +18,15 @@ namespace vtex {
 class FolderLock {
 public:
     enum class Mode { Refuse, Wait };
-    /// Locks `folder` (which must exist). Refuse: throws IoError naming the folder and the
-    /// holder ("in use by pid 1234 on host h") when another process holds it; Wait: blocks until
-    /// it is free.
-    explicit FolderLock(const std::filesystem::path& folder, Mode mode = Mode::Refuse);
+    /// Exclusive: one holder (a whole run). Shared: any number of shared holders at once, and no
+    /// exclusive one (the stages of one cluster submission, `vtex run --stage`, each of which
+    /// also takes its stage's own lock exclusively).
+    enum class Access { Exclusive, Shared };
+    /// Locks `folder` (which must exist) through its file `name`. Refuse: throws IoError naming
+    /// the folder and the holder ("in use by host:1234") when another process holds it in a way
+    /// that excludes this one; Wait: blocks until it is free.
+    explicit FolderLock(const std::filesystem::path& folder, Mode mode = Mode::Refuse,
+                        Access access = Access::Exclusive, const std::string& name = ".vtex.lock");
     ~FolderLock();
     FolderLock(const FolderLock&) = delete;
     FolderLock& operator=(const FolderLock&) = delete;
