@@ -1,15 +1,13 @@
 // See prim_table.h.
 #include "prim_table.h"
 
-
 namespace vtex::render::detail {
 namespace {
 
 // ingest::patchCorners without its checks, which buildSceneGeometry made when it added the face:
 // this runs for every ray that meets a cell.
 void corners(const ingest::QuadMesh& mesh, std::uint32_t face, std::array<Vec3, 4>& p, std::array<Vec3, 4>& n) {
-    const auto& q = mesh.quads[face];
-    const std::uint32_t order[4] = {q[0], q[1], q[3], q[2]};
+    const std::array<std::uint32_t, 4> order = ingest::patchOrder(mesh, face);
     for (std::size_t c = 0; c < 4; ++c) {
         p[c] = mesh.positions[order[c]].cast<double>();
         n[c] = order[c] < mesh.normals.size() ? mesh.normals[order[c]].cast<double>() : Vec3(0, 0, 1);
@@ -17,11 +15,6 @@ void corners(const ingest::QuadMesh& mesh, std::uint32_t face, std::array<Vec3, 
 }
 
 }  // namespace
-
-int PrimTable::addSurface(Surface surface) {
-    mSurfaces.push_back(std::move(surface));
-    return int(mSurfaces.size() - 1);
-}
 
 Prim PrimTable::operator[](std::size_t i) const {
     const Face& f = mFaces[i];
@@ -33,7 +26,7 @@ Prim PrimTable::operator[](std::size_t i) const {
     corners(*s.mesh, f.face, prim.p, prim.n);
     if (s.cell || s.floor) {
         prim.cell = TrilinearCell(prim.p, prim.n, s.height, s.under);
-        prim.map = makeCellMap(s.placing, drawFaceTransform(s.placing.perturb, f.face));
+        prim.map = map(i);
         if (s.floor) prim.p = prim.cell.faceCorners(0);
         prim.textured = s.cell;
     }

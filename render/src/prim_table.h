@@ -43,8 +43,9 @@ public:
         TexelPlacing placing;
     };
 
-    /// Adds a surface placing; returns its index, which add() takes.
-    int addSurface(Surface surface);
+    /// Adds a surface placing: they are numbered in the order added (as SceneGeometry::surfaces),
+    /// which add() takes.
+    void addSurface(Surface surface) { mSurfaces.push_back(std::move(surface)); }
     /// Adds face `face` of surface `surface`'s mesh (its corners checked by the caller).
     void add(int surface, std::uint32_t face) { mFaces.push_back({std::uint32_t(surface), face}); }
 

@@ -182,7 +182,6 @@ private:
     void marchSpan(const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, double tIn,
                    double tOut, const Vec3& d, PathState& state, Counters& counters) const {
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
-        const int primIndex = prim.index;
         const double tMid = 0.5 * (tIn + tOut);
         const double scale = localScale(prim, 0.5 * (rIn + rOut));
         const int maxLevel = texel.volume->maxLevel();
@@ -204,7 +203,7 @@ private:
             compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid, state);
             return;
         }
-        SpanContext span(mScene, mOptions, mShadows, prim, primIndex, surface, texel, rIn, rOut, tIn, tOut, scale,
+        SpanContext span(mScene, mOptions, mShadows, prim, surface, texel, rIn, rOut, tIn, tOut, scale,
                          state.transmittance, choice.coarse);
         if (counters.histogram.size() < std::size_t(maxLevel + 1)) counters.histogram.resize(std::size_t(maxLevel + 1), 0.0);
         if (fineWeight < 1) counters.histogram[std::size_t(choice.coarse)] += (1 - fineWeight) * (1 - meshWeight);
@@ -250,12 +249,11 @@ private:
         const auto hit = texel.source->intersect(p0, p1, 0);
         if (!hit) return {};
         const detail::SourcePoint p = detail::sourcePoint(prim, p0 + hit->s * (p1 - p0), hit->normal, d);
-        const int primIndex = prim.index;
         const double t = tIn + hit->s * (tOut - tIn);
         const Color radiance = detail::shadePhong(
             mScene.lights, p.world, p.normal, p.normal, -d, texel.material, hit->albedo, p.scale,
             [&](const Vec3& origin, const Vec3& l, double distance) {
-                return mShadows.tracedShadow(origin, l, distance, mConeSpread * t, primIndex, p.cell, counters);
+                return mShadows.tracedShadow(origin, l, distance, mConeSpread * t, prim.index, p.cell, counters);
             });
         return {radiance, 0.0};
     }

@@ -43,10 +43,10 @@ int nearestRecorded(const SpanContext::ShadowTrack& track, double sm, double sha
 }  // namespace
 
 SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const ShadowQueries& shadows, const Prim& prim_,
-                         int primIndex_, const SurfaceRuntime& surface_, const TexelRuntime& texel_, const Vec3& rIn,
+                         const SurfaceRuntime& surface_, const TexelRuntime& texel_, const Vec3& rIn,
                          const Vec3& rOut, double tIn_, double tOut_, double scale_, double startTransmittance,
                          int coarseLevel)
-    : prim(prim_), primIndex(primIndex_), surface(surface_), texel(texel_), tIn(tIn_), tOut(tOut_), scale(scale_),
+    : prim(prim_), surface(surface_), texel(texel_), tIn(tIn_), tOut(tOut_), scale(scale_),
       startT(startTransmittance), shareDistance(1.0 / double(std::int64_t(1) << coarseLevel)),
       lights(scene.lights.size()), tracks(scene.lights.size()) {
     p0 = tile(rIn, prim);
@@ -73,7 +73,7 @@ SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const
         lightAt(scene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
         sl.usable = referenceLight(sl.lw, sl.lr);
         if (sl.usable && options.shading == ShadingMode::Fast) sl.kernel.emplace(sl.lr, Vec3(-dir), texel.material.shininess);
-        if (sl.usable) sl.latticeSlot = shadows.latticeSlot(sl.lw, INFINITY, primIndex);
+        if (sl.usable) sl.latticeSlot = shadows.latticeSlot(sl.lw, INFINITY, prim.index);
     }
 }
 

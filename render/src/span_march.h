@@ -46,14 +46,13 @@ struct SpanContext {
 
     /// `scale`: localScale at the span's middle, which the caller took to choose the levels.
     SpanContext(const Scene& scene, const RenderOptions& options, const ShadowQueries& shadows, const Prim& prim,
-                int primIndex, const SurfaceRuntime& surface, const TexelRuntime& texel, const Vec3& rIn, const Vec3& rOut,
+                const SurfaceRuntime& surface, const TexelRuntime& texel, const Vec3& rIn, const Vec3& rOut,
                 double tIn, double tOut, double scale, double startTransmittance, int coarseLevel);
 
     /// The light direction lw (world) in unit tiled reference space; false where undefined.
     bool referenceLight(const Vec3& lw, Vec3& lr) const;
 
     const Prim& prim;
-    int primIndex;
     const SurfaceRuntime& surface;
     const TexelRuntime& texel;
     Vec3 p0, p1, dir;      ///< tiled reference space; dir unit

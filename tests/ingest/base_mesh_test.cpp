@@ -17,11 +17,7 @@ using vtex::test::GltfBuilder;
 
 namespace {
 
-fs::path tmp(const std::string& name) {
-    const fs::path dir = fs::path(VTEX_TEST_TMP) / "base_mesh";
-    fs::create_directories(dir);
-    return dir / name;
-}
+fs::path tmp(const std::string& name) { return test::tmpFile("base_mesh", name); }
 
 TEST(BaseMesh, QuadsStayQuadsTrianglesCollapse) {
     const std::string obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\nv 3 0 0\n"

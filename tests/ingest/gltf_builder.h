@@ -109,4 +109,11 @@ inline void writeBytes(const std::filesystem::path& path, const std::string& byt
 // One triangle in the z = 0 plane, counter-clockwise seen from +z.
 inline const std::vector<float> kTriangle = {0, 0, 0, 1, 0, 0, 0, 1, 0};
 
+/// `name` in the test's own folder `folder` under the build's temporary directory (made).
+inline std::filesystem::path tmpFile(const std::string& folder, const std::string& name) {
+    const std::filesystem::path dir = std::filesystem::path(VTEX_TEST_TMP) / folder;
+    std::filesystem::create_directories(dir);
+    return dir / name;
+}
+
 }  // namespace vtex::test

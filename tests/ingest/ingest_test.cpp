@@ -24,11 +24,7 @@ using vtex::test::GltfBuilder;
 
 namespace {
 
-fs::path tmp(const std::string& name) {
-    const fs::path dir = fs::path(VTEX_TEST_TMP) / "ingest";
-    fs::create_directories(dir);
-    return dir / name;
-}
+fs::path tmp(const std::string& name) { return test::tmpFile("ingest", name); }
 
 TriangleMesh loadText(const std::string& name, const std::string& bytes, IngestReport* report = nullptr,
                       IngestOptions options = {}) {

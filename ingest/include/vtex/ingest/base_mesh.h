@@ -43,10 +43,15 @@ struct QuadMesh {
 /// stored counter-clockwise, P00 P10 P11 P01), and their normals (+z where the mesh has none):
 /// what the renderers and the layout export place a cell on. False when a corner index is out of
 /// range or a value is not finite.
+/// The vertex indices of those corners, P00, P10, P01, P11.
+inline std::array<std::uint32_t, 4> patchOrder(const QuadMesh& mesh, std::size_t face) {
+    const auto& q = mesh.quads[face];
+    return {q[0], q[1], q[3], q[2]};
+}
+
 inline bool patchCorners(const QuadMesh& mesh, std::size_t face, std::array<Eigen::Vector3d, 4>& p,
                          std::array<Eigen::Vector3d, 4>& n) {
-    const auto& q = mesh.quads[face];
-    const std::uint32_t order[4] = {q[0], q[1], q[3], q[2]};
+    const std::array<std::uint32_t, 4> order = patchOrder(mesh, face);
     for (std::size_t c = 0; c < 4; ++c) {
         if (order[c] >= mesh.positions.size()) return false;
         p[c] = mesh.positions[order[c]].cast<double>();
