@@ -19,8 +19,9 @@ else
     build_dir=${VTEX_BUILD_DIR:-$root/build}
 fi
 
-# The ingest tests read Debian's sample models; the fuzz smoke test wants clang.
-VTEX_BUILD_DIR=$build_dir VTEX_EXTRA_PACKAGES="assimp-testmodels clang-14 libclang-rt-14-dev" \
+# The ingest tests read Debian's sample models; the fuzz smoke test wants clang; the cluster
+# tests start a one-node Slurm (scripts/slurm-cluster.sh).
+VTEX_BUILD_DIR=$build_dir VTEX_EXTRA_PACKAGES="assimp-testmodels clang-14 libclang-rt-14-dev slurm-wlm munge" \
     bash "$root/scripts/build.sh" "${configure[@]}"
 cd "$build_dir"
 ctest --output-on-failure --parallel "$(nproc)" "$@"

@@ -1,8 +1,10 @@
 // `vtex run pipeline.toml [-o DIR] [--force] [--jobs N] [--dry-run] [--strict] [--stage ID]`: a
 // staged batch run with caching, its progress drawn on a terminal (run_progress.h); or one stage
-// of it alone, its inputs from the cache (what a cluster job runs).
+// of it alone, its inputs from the cache (what a cluster job runs); or its stages submitted to
+// Slurm (`--executor slurm`, run_slurm.h), and `--status DIR` of such a submission.
 #include "cli.h"
 #include "run_progress.h"
+#include "run_slurm.h"
 
 #include <vtex/core/error.h>
 #include <vtex/pipelines/pipeline.h>
@@ -37,9 +39,10 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         bool dryRun = false;
         bool strict = false;
         std::string stage;
+        SlurmFlags slurm;
     };
     auto o = std::make_shared<Options>();
-    app.add_option("PIPELINE", o->file, "The pipeline file (.toml)")->required();
+    app.add_option("PIPELINE", o->file, "The pipeline file (.toml); not with --status");
     app.add_option("-o,--output", o->output, "Output directory (default: the file's [pipeline] output, or <name>-out)");
     app.add_flag("--force", o->force, "Redo every stage, cached or not");
     app.add_option("--jobs", o->jobs, "Stages run at once (0: as many as cores)")->check(CLI::Range(0, 1024));
@@ -54,7 +57,15 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
                    "Run only this stage, KIND/NAME as the log names it (render/fur), its inputs taken from the cache "
                    "(exit 3 when one is not there), with the result it has in a whole run; no report is written")
         ->excludes("--dry-run");
+    addSlurmOptions(app, o->slurm);
     return [o](const GlobalOptions& global) {
+        if (!o->slurm.status.empty()) {
+            if (!o->file.empty()) throw CLI::ValidationError("--status", "takes an output folder, not a pipeline file too");
+            return printSubmissionStatus(o->slurm.status);
+        }
+        if (o->file.empty()) throw CLI::RequiredError("PIPELINE");
+        if (o->slurm.executor == "slurm" && (o->dryRun || !o->stage.empty()))
+            throw CLI::ValidationError("--executor", "slurm submits a whole pipeline: not with --dry-run or --stage");
         const ThreadLimit threadLimit(o->threads);
         const pipelines::Pipeline pipeline = pipelines::loadPipeline(o->file);
         if (o->strict && !pipeline.unknownKeys.empty())
@@ -71,6 +82,7 @@ const bool registered = registerCommand(80, [](CLI::App& app) -> Action {
         options.waitForLock = o->wait;
         options.stage = o->stage;
         if (o->dryRun) return printPlan(pipelines::planPipeline(pipeline, options));
+        if (o->slurm.executor == "slurm") return submitToSlurm(pipeline, options, o->slurm, global);
         pipelines::RunReport report;
         {
             RunProgressDisplay display(global, o->jobs);  // gone before the closing lines are printed

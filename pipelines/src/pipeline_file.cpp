@@ -64,6 +64,29 @@ void checkPattern(const TomlReader& reader, const std::string& path, const Sourc
                         std::to_string(sampler::kMaxPatternTriangles) + " vtex ingests");
 }
 
+// [slurm]: passed to sbatch as they are, so only their shape is checked here (sbatch judges the
+// values); an argument with a newline would break the job script's comment lines.
+void readSlurmSettings(TomlReader& reader, const toml::table& t, SlurmSettings& s) {
+    reader.checkKeys(t, "slurm", {"partition", "time", "mem", "cpus", "sbatch_args"});
+    s.partition = reader.string(t, "slurm", "partition", std::string());
+    s.time = reader.string(t, "slurm", "time", std::string());
+    s.mem = reader.string(t, "slurm", "mem", std::string());
+    s.cpus = int(reader.integer(t, "slurm", "cpus", 2, 1, 4096));
+    if (t.contains("sbatch_args")) {
+        const toml::array* args = t["sbatch_args"].as_array();
+        if (!args) reader.fail("slurm.sbatch_args", "must be an array of strings");
+        for (const toml::node& arg : *args) {
+            const auto word = arg.as_string();
+            if (!word || word->get().empty()) reader.fail("slurm.sbatch_args", "must be an array of non-empty strings");
+            s.sbatchArguments.push_back(word->get());
+        }
+    }
+    for (const std::string* value : {&s.partition, &s.time, &s.mem})
+        if (value->find_first_of("\n\r") != std::string::npos) reader.fail("slurm", "a value holds a line break");
+    for (const std::string& value : s.sbatchArguments)
+        if (value.find_first_of("\n\r") != std::string::npos) reader.fail("slurm.sbatch_args", "an argument holds a line break");
+}
+
 }  // namespace
 
 std::size_t sceneTexelIndex(const render::Scene& scene, const std::string& name) {
@@ -80,7 +103,7 @@ Pipeline loadPipeline(const fs::path& file) {
     TomlReader reader(file, pipeline.warnings);
     reader.collectUnknownKeys(pipeline.unknownKeys);
     const toml::table root = reader.parse(text);
-    reader.checkKeys(root, "", {"pipeline", "source", "texel", "render", "compare"});
+    reader.checkKeys(root, "", {"pipeline", "slurm", "source", "texel", "render", "compare"});
 
     pipeline.output = file.parent_path() / (file.stem().string() + "-out");
     if (const toml::table* settings = reader.subtable(root, "", "pipeline", false)) {
@@ -88,6 +111,8 @@ Pipeline loadPipeline(const fs::path& file) {
         pipeline.fitResolution = reader.boolean(*settings, "pipeline", "fit_resolution", true);
         if (settings->contains("output")) pipeline.output = reader.resolve("pipeline.output", reader.string(*settings, "pipeline", "output", {}));
     }
+
+    if (const toml::table* slurm = reader.subtable(root, "", "slurm", false)) readSlurmSettings(reader, *slurm, pipeline.slurm);
 
     std::set<std::string> sourceNames, texelNames, renderNames, compareNames;
     const auto patterns = sampler::patternNames();

@@ -3,6 +3,7 @@
 // outputs are up to date; or, for a dry run, only tells which would run and why.
 #include <vtex/pipelines/pipeline.h>
 #include <vtex/pipelines/run_observer.h>
+#include <vtex/pipelines/slurm.h>
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
@@ -124,9 +125,9 @@ fs::path outputRoot(const Pipeline& pipeline, const RunOptions& options) {
     return options.output.empty() ? pipeline.output : options.output;
 }
 
-// The plan of a graph nothing has run in yet: wave by wave, a stage whose inputs are all up to
-// date is judged by its manifest, one with an input that runs first runs too.
-std::vector<PlannedStage> plan(std::vector<Stage>& stages, const fs::path& root, bool force) {
+}  // namespace
+
+std::vector<PlannedStage> detail::planStages(std::vector<Stage>& stages, const fs::path& root, bool force) {
     std::vector<PlannedStage> out;
     std::size_t wave = 0;
     for (std::size_t i = 0; i < stages.size(); ++i) {
@@ -155,6 +156,8 @@ std::vector<PlannedStage> plan(std::vector<Stage>& stages, const fs::path& root,
     }
     return out;
 }
+
+namespace {
 
 // Forwards a stage's own progress to the run's observer, as the fraction of its current phase.
 class StageProgress final : public Progress {
@@ -228,7 +231,7 @@ std::vector<PlannedStage> planPipeline(const Pipeline& pipeline, const RunOption
     std::vector<Stage> stages;
     std::vector<Omission> leftOut;
     detail::buildStageGraph(pipeline, root, options.force, budget, stages, leftOut);
-    return plan(stages, root, options.force);
+    return detail::planStages(stages, root, options.force);
 }
 
 namespace {
@@ -351,6 +354,14 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     // shares it with the other stages of a cluster submission and holds its own stage's.
     const FolderLock::Mode mode = options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse;
     const FolderLock lock(root, mode, alone < stages.size() ? FolderLock::Access::Shared : FolderLock::Access::Exclusive);
+    // The jobs of a Slurm submission write this folder without holding its lock while they pend.
+    if (alone == stages.size())
+        if (const std::vector<std::string> live = liveSubmissionJobs(root); !live.empty()) {
+            std::string ids;
+            for (const std::string& id : live) ids += (ids.empty() ? "" : ", ") + id;
+            throw IoError(root, "jobs of a Slurm submission to it are still queued or running (" + ids +
+                                    "): wait for them (vtex run --status " + root.string() + "), or scancel them");
+        }
     prepareFolders(root, alone == stages.size());
     MemoryMonitor memory;
     if (alone < stages.size()) {
@@ -363,7 +374,7 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
         return report;
     }
     // The plan for the progress display, made under the lock (no other run changes the cache).
-    if (options.observer) options.observer->planned(plan(stages, root, options.force));
+    if (options.observer) options.observer->planned(detail::planStages(stages, root, options.force));
 
     // Run wave by wave; a wave is a run of stages of one kind.
     tbb::task_arena arena(options.jobs > 0 ? options.jobs : tbb::task_arena::automatic);

@@ -45,4 +45,9 @@ std::filesystem::path manifestPath(const Stage& stage, const std::filesystem::pa
 void buildStageGraph(const Pipeline& pipeline, const std::filesystem::path& root, bool force, MemoryBudget& budget,
                      std::vector<Stage>& stages, std::vector<Omission>& leftOut);
 
+/// The plan of a graph nothing has run in yet (planPipeline, and what a Slurm submission
+/// submits): wave by wave, a stage whose inputs are all up to date is judged by its manifest, one
+/// with an input that runs first runs too. Leaves the stages as it found them.
+std::vector<PlannedStage> planStages(std::vector<Stage>& stages, const std::filesystem::path& root, bool force);
+
 }  // namespace vtex::pipelines::detail

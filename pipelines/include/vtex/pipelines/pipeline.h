@@ -86,6 +86,19 @@ struct CompareStep {
     std::string a, b;                   ///< RenderStep names
 };
 
+/// [slurm] of a pipeline file: what `vtex run --executor slurm` asks of the cluster (slurm.h);
+/// the flags of the same names override it. Empty strings leave a setting to the cluster.
+struct SlurmSettings {
+    std::string partition;              ///< sbatch --partition
+    std::string time;                   ///< --time, each job's wall-time limit ("1:00:00")
+    /// --mem of every job. Empty: renders and tiles take their node's whole memory (--mem=0, with
+    /// --exclusive), the other stages the cluster's default per CPU.
+    std::string mem;
+    int cpus = 2;                       ///< CPUs (-c) of a sample or build job; sources, compares and assembles take 1
+    std::vector<std::string> sbatchArguments;  ///< more sbatch arguments, one word each, after vtex's own
+    friend bool operator==(const SlurmSettings&, const SlurmSettings&) = default;
+};
+
 struct Pipeline {
     std::filesystem::path file;
     std::filesystem::path output;       ///< [pipeline] output, resolved; default "<file stem>-out"
@@ -97,6 +110,7 @@ struct Pipeline {
     /// texel only to the finest level its renders can use (render::finestUsefulLevels) and leave
     /// out the texels no render uses.
     bool fitResolution = true;
+    SlurmSettings slurm;                ///< [slurm]
     std::vector<std::string> warnings;  ///< unknown keys, as messages naming the file
     std::vector<std::string> unknownKeys;  ///< the same keys' paths ("render[2].spp_typo"), for `--strict`
 };
