@@ -76,7 +76,9 @@ void printSubmissionStatus(const std::string& folder) {
         ++counts[state];
         std::cout << std::left << std::setw(int(width) + 2) << s.stage << std::setw(9) << state
                   << std::setw(10) << (s.job.empty() ? "-" : s.job) << s.detail;
-        if (s.state == pipelines::StageStatus::State::Failed && !s.log.empty()) std::cout << "; log: " << s.log.string();
+        // (a job cancelled before it started has no log)
+        if (s.state == pipelines::StageStatus::State::Failed && !s.log.empty() && fs::exists(s.log))
+            std::cout << "; log: " << s.log.string();
         std::cout << "\n";
     }
     std::string summary;

@@ -98,8 +98,9 @@ std::vector<std::string> liveSubmissionJobs(const std::filesystem::path& output)
         // No Slurm to ask here (or no readable record): nothing known to run for this folder.
         return {};
     }
-    for (const auto& [id, state] : states)
-        if (detail::isLive(state.state)) live.push_back(id);
+    for (const std::string& id : ids)  // in the order they were submitted
+        if (const auto known = states.find(id); known != states.end() && detail::isLive(known->second.state))
+            live.push_back(id);
     return live;
 }
 

@@ -45,7 +45,7 @@ std::vector<StageStatus> submissionStatus(const std::filesystem::path& output) {
     // The cache's view: what is up to date now (read only; the jobs may be writing meanwhile, and a
     // stage whose manifest is not written yet is simply not up to date).
     RunOptions options;
-    options.output = record->output;
+    options.output = output;  // where it is now, should the folder have moved
     const std::vector<PlannedStage> plan = planPipeline(loadPipeline(record->pipeline), options);
     std::map<std::string, const SubmittedJob*> jobOf;
     std::vector<std::string> ids;

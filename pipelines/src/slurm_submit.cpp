@@ -103,8 +103,10 @@ void refuseLiveSubmission(const fs::path& root) {
     std::vector<std::string> ids;
     for (const SubmittedJob& j : record->jobs) ids.push_back(j.job);
     std::string live;
-    for (const auto& [id, state] : detail::queryJobs(ids))
-        if (detail::isLive(state.state)) live += (live.empty() ? "" : ", ") + id;
+    const auto states = detail::queryJobs(ids);
+    for (const std::string& id : ids)  // in the order they were submitted
+        if (const auto known = states.find(id); known != states.end() && detail::isLive(known->second.state))
+            live += (live.empty() ? "" : ", ") + id;
     if (!live.empty())
         throw IoError(root, "jobs of the submission of " + record->submittedAt + " are still queued or running (" + live +
                                 "): wait for them (vtex run --status " + root.string() + "), or scancel them");
