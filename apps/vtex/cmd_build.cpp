@@ -81,7 +81,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     app.add_option("--filter", flags->filter,
                    "Filter rule: neyret (mean of normalised M, the paper's) or sggx (mean of S)")
         ->capture_default_str()
-        ->check(CLI::IsMember({"neyret", "sggx"}));
+        ->check(CLI::IsMember(octree::kFilterRuleNames.names()));
     app.add_option("--tolerance", flags->tolerance,
                    "Drop children a parent can stand for within this: the largest change of the transmittance "
                    "along any chord of the parent (per unit tau), and of the ellipsoid's entries and the albedo; "

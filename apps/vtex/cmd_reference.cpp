@@ -28,7 +28,7 @@ const bool registered = registerCommand(45, [](CLI::App& app) -> Action {
     app.add_option("--mode", a->mode,
                    "embedded: trace each cell's straight reference-space segment against one shared source BVH; "
                    "deformed: deform the source into every cell and trace one world BVH")
-        ->check(CLI::IsMember({"embedded", "deformed"}))
+        ->check(CLI::IsMember(render::kReferenceModeNames.names()))
         ->capture_default_str();
     app.add_option("--tolerance", a->tolerance,
                    "Deformed mode: largest distance of a subdivided triangle from the deformed surface, fraction of the cell size")
@@ -40,7 +40,7 @@ const bool registered = registerCommand(45, [](CLI::App& app) -> Action {
         render::ReferenceOptions options;
         applyImageOptions(*a, options);
         options.spp = a->spp;
-        options.mode = a->mode == "deformed" ? render::ReferenceMode::Deformed : render::ReferenceMode::Embedded;
+        options.mode = *render::kReferenceModeNames.parse(a->mode);
         options.tolerance = a->tolerance;
         TerminalProgress progress(global);
         const render::RenderResult result = render::renderReference(scene, options, progress);

@@ -53,7 +53,7 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         ->check(CLI::IsMember({"on", "off"}))
         ->capture_default_str();
     app.add_option("--shading", a->shading, "Micro-primitive reflectance: fast (SGGX visible-normal quadrature) or reference (the paper's integration)")
-        ->check(CLI::IsMember({"fast", "reference"}))
+        ->check(CLI::IsMember(render::kShadingModeNames.names()))
         ->capture_default_str();
     return [a](const GlobalOptions& global) {
         const render::Scene scene = loadSceneFor(*a, global);
@@ -61,7 +61,7 @@ const bool registered = registerCommand(40, [](CLI::App& app) -> Action {
         applyImageOptions(*a, options);
         options.spp = a->spp;
         options.lodBias = a->lodBias;
-        options.shading = a->shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
+        options.shading = *render::kShadingModeNames.parse(a->shading);
         if (a->exact) options.approximations = render::ApproximationBudget::exact();
         else options.approximations.shadowRefresh = a->shadowRefresh;
         options.hybrid = a->hybrid == "on";

@@ -51,14 +51,14 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
     app.add_flag("--cyclic", flags->cyclic, "Periodic in x and y (tileable patterns: grass, fur)");
     app.add_option("--solid", flags->solid, "Fill the interior of closed meshes: auto (if closed), on, off")
         ->capture_default_str()
-        ->check(CLI::IsMember({"auto", "on", "off"}));
+        ->check(CLI::IsMember(sampler::kSolidModeNames.names()));
     app.add_option("--solid-density", flags->solidDensity, "Density of solid voxels, 1/length (0 = 16·N)")
         ->check(finiteNumber())
         ->check(CLI::NonNegativeNumber);
     app.add_option("--bounds", flags->bounds,
                    "Source → unit cube: auto (unit if the mesh fits in [0,1]³, else fit), unit, fit")
         ->capture_default_str()
-        ->check(CLI::IsMember({"auto", "unit", "fit"}));
+        ->check(CLI::IsMember(sampler::kBoundsModeNames.names()));
     addMaxMemoryOption(app, flags->maxMemory, "the sampler's footprint");
     addThreadsOption(app, flags->threads);
     auto* update = app.add_option("--update", flags->update,
@@ -85,12 +85,8 @@ const bool registered = registerCommand(20, [](CLI::App& app) -> Action {
         sampler::SampleOptions options;
         options.resolution = flags->resolution;
         options.cyclic = flags->cyclic;
-        options.solid = flags->solid == "on" ? sampler::SolidMode::On
-                        : flags->solid == "off" ? sampler::SolidMode::Off
-                                                : sampler::SolidMode::Auto;
-        options.bounds = flags->bounds == "unit" ? sampler::BoundsMode::Unit
-                         : flags->bounds == "fit" ? sampler::BoundsMode::Fit
-                                                  : sampler::BoundsMode::Auto;
+        options.solid = *sampler::kSolidModeNames.parse(flags->solid);
+        options.bounds = *sampler::kBoundsModeNames.parse(flags->bounds);
         options.solidDensity = flags->solidDensity;
         options.maxMemoryBytes = flags->maxMemory;
         options.source = flags->input;

@@ -108,13 +108,9 @@ std::vector<VolumeBlock> Octree::expandLevel(std::uint32_t level) const {
     return out;
 }
 
-std::string_view filterRuleName(FilterRule rule) { return rule == FilterRule::Neyret ? "neyret" : "sggx"; }
+std::string_view filterRuleName(FilterRule rule) { return kFilterRuleNames.name(rule); }
 
-std::optional<FilterRule> parseFilterRule(std::string_view name) {
-    if (name == "neyret") return FilterRule::Neyret;
-    if (name == "sggx") return FilterRule::Sggx;
-    return std::nullopt;
-}
+std::optional<FilterRule> parseFilterRule(std::string_view name) { return kFilterRuleNames.parse(name); }
 
 namespace {
 

@@ -6,6 +6,8 @@
 /// and the key path ("surface[1].material.diffuse"); unknown keys become warnings.
 #pragma once
 
+#include <vtex/core/enum_names.h>
+
 #include <vtex/core/error.h>
 
 #include <toml++/toml.h>
@@ -133,6 +135,17 @@ public:
             if (value == a) return value;
             list += (list.empty() ? "" : ", ") + std::string(a);
         }
+        fail(join(path, name), "must be one of " + list + ", got '" + value + "'");
+    }
+
+    /// A value named in `names` (enum_names.h); `fallback` when the key is absent.
+    template <class Enum, std::size_t N>
+    Enum enumeration(const toml::table& table, const std::string& path, std::string_view name, Enum fallback,
+                     const EnumNames<Enum, N>& names) const {
+        const std::string value = string(table, path, name, std::string(names.name(fallback)));
+        if (const auto parsed = names.parse(value)) return *parsed;
+        std::string list;
+        for (const auto& entry : names.entries) list += (list.empty() ? "" : ", ") + std::string(entry.second);
         fail(join(path, name), "must be one of " + list + ", got '" + value + "'");
     }
 

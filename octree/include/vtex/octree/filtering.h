@@ -6,6 +6,7 @@
 /// (DESIGN.md, "Octree: filtering and compression"); filterError() measures each.
 #pragma once
 
+#include <vtex/core/enum_names.h>
 #include <vtex/octree/voxel.h>
 
 #include <optional>
@@ -22,6 +23,8 @@ enum class FilterRule {
              ///< zero-area directions at zero but overestimates the area along each child's
              ///< normal (√2 for two orthogonal planes)
 };
+/// "neyret", "sggx": `vtex build --filter`, a pipeline texel's `filter`, the .vto header.
+inline constexpr EnumNames<FilterRule, 2> kFilterRuleNames{{{{FilterRule::Neyret, "neyret"}, {FilterRule::Sggx, "sggx"}}}};
 
 /// The filtered primitive of `children` weighted by `weights` (densities, ≥ 0), normalised
 /// to unit mean apparent area (Exact). Children of zero weight are ignored; empty when the

@@ -25,6 +25,8 @@ enum class ReferenceMode {
     /// measures what the straight-segment assumption loses as well.
     Deformed
 };
+/// "embedded", "deformed": `vtex reference --mode`, a pipeline render's `mode`.
+inline constexpr EnumNames<ReferenceMode, 2> kReferenceModeNames{{{{ReferenceMode::Embedded, "embedded"}, {ReferenceMode::Deformed, "deformed"}}}};
 
 /// ImageOptions with 16 jittered samples per pixel by default; aovs fill Image::depth only
 /// (Image::level stays −1).

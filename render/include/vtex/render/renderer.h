@@ -9,6 +9,7 @@
 /// not depend on the thread count.
 #pragma once
 
+#include <vtex/core/enum_names.h>
 #include <vtex/core/progress.h>
 #include <vtex/render/image.h>
 #include <vtex/render/scene.h>
@@ -33,6 +34,8 @@ enum class ShadingMode {
     /// Heitz et al. 2015): R(l,v) = E_{N∼D_v}[(N·l)⁺ ρ(N,l,v)] with 16 deterministic samples.
     Fast
 };
+/// "fast", "reference": `vtex render --shading`, a pipeline render's `shading`.
+inline constexpr EnumNames<ShadingMode, 2> kShadingModeNames{{{{ShadingMode::Fast, "fast"}, {ShadingMode::Reference, "reference"}}}};
 
 /// What both renderers take: the image and how its pixels are sampled.
 struct ImageOptions {

@@ -14,6 +14,8 @@
 /// octree-aligned blocks. Work is O(triangles + pieces), memory O(occupied voxels), parallel.
 #pragma once
 
+#include <vtex/core/enum_names.h>
+
 #include <vtex/core/progress.h>
 #include <vtex/ingest/mesh.h>
 #include <vtex/octree/volume.h>
@@ -30,6 +32,8 @@ enum class SolidMode {
     On,    ///< fill it; the mesh must be closed
     Off    ///< surfaces only
 };
+/// "auto", "on", "off": `vtex sample --solid`, a pipeline texel's `solid`.
+inline constexpr EnumNames<SolidMode, 3> kSolidModeNames{{{{SolidMode::Auto, "auto"}, {SolidMode::On, "on"}, {SolidMode::Off, "off"}}}};
 
 /// How source (world) coordinates map onto the unit reference cube.
 enum class BoundsMode {
@@ -37,6 +41,8 @@ enum class BoundsMode {
     Unit,  ///< identity: the source is already in reference units
     Fit    ///< uniform scale so that the bounding box's longest side is 1, its minimum corner at 0
 };
+/// "auto", "unit", "fit": `vtex sample --bounds`.
+inline constexpr EnumNames<BoundsMode, 3> kBoundsModeNames{{{{BoundsMode::Auto, "auto"}, {BoundsMode::Unit, "unit"}, {BoundsMode::Fit, "fit"}}}};
 
 struct SampleOptions {
     std::uint32_t resolution = 128;  ///< N, a power of two, 1 … 2^20
