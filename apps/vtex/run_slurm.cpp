@@ -25,8 +25,8 @@ void addSlurmOptions(CLI::App& app, SlurmFlags& flags) {
     app.add_option("--cpus", flags.cpus, "Slurm: CPUs of a sample or build job (default: [slurm] cpus, 2)")
         ->check(CLI::Range(1, 4096));
     app.add_option("--sbatch-arg", flags.sbatchArguments,
-                   "Slurm: one more sbatch argument for every job, after vtex's own (repeatable; write "
-                   "--sbatch-arg=--qos=long for a value that starts with -)")
+                   "Slurm: one more sbatch argument for every job, after vtex's own (repeatable; a value that "
+                   "starts with a dash goes after an equals sign, as in --sbatch-arg=-qlong)")
         ->allow_extra_args(false);
     app.add_option("--status", flags.status,
                    "Show each stage of the last Slurm submission to this output folder: cached, queued, running, "
