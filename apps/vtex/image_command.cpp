@@ -4,8 +4,28 @@
 #include <vtex/render/image.h>
 
 #include <optional>
+#include <stdexcept>
+#include <string>
 
 namespace vtex::cli {
+namespace {
+
+// `--rows A:B`: whole numbers, A below B (B exclusive), into `begin` and `end`; what is wrong
+// with the text otherwise. Whether B fits the image is known once the scene is read
+// (loadSceneFor).
+std::string parseRows(const std::string& text, int& begin, int& end) {
+    const std::size_t colon = text.find(':');
+    const auto number = [](const std::string& s) {
+        return !s.empty() && s.size() <= 5 && s.find_first_not_of("0123456789") == std::string::npos;
+    };
+    if (colon == std::string::npos || !number(text.substr(0, colon)) || !number(text.substr(colon + 1)))
+        return "expected A:B, the rows from A (inclusive) to B (exclusive), whole numbers";
+    begin = std::stoi(text.substr(0, colon));
+    end = std::stoi(text.substr(colon + 1));
+    return begin < end ? "" : "empty: A must be below B (which is exclusive)";
+}
+
+}  // namespace
 
 void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::string& aovHelp) {
     app.add_option("SCENE", args.scene, "The scene file (scene.toml)")->required();
@@ -14,6 +34,17 @@ void addImageCommandOptions(CLI::App& app, ImageCommandArgs& args, const std::st
     app.add_option("--png", args.png, "Also write an sRGB PNG preview");
     app.add_option("--width", args.width, "Image width (default: the scene's camera.width)")->check(CLI::Range(1, 16384));
     app.add_option("--height", args.height, "Image height (default: the scene's camera.height)")->check(CLI::Range(1, 16384));
+    app.add_option("--rows", args.rows,
+                   "Render only the rows A to B (B exclusive, row 0 at the top) of the image: an image of those rows, "
+                   "each pixel exactly as in the whole render")
+        ->type_name("A:B")
+        ->check(CLI::Validator(
+            [](std::string& text) {
+                int begin = 0, end = 0;
+                const std::string why = parseRows(text, begin, end);
+                return why.empty() ? why : text + ": " + why;
+            },
+            "A:B"));
     app.add_option("--stats", args.stats, "Write statistics (times, rays, …) as JSON");
     addThreadsOption(app, args.threads);
     app.add_flag("--aov", args.aovs, aovHelp);
@@ -27,6 +58,7 @@ void applyImageOptions(const ImageCommandArgs& args, render::ImageOptions& optio
     options.threads = args.threads;
     options.aovs = args.aovs;
     options.maxMemoryBytes = args.maxMemory;
+    if (!args.rows.empty()) parseRows(args.rows, options.rowBegin, options.rowEnd);  // checked when parsed
 }
 
 render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& global) {
@@ -39,6 +71,13 @@ render::Scene loadSceneFor(const ImageCommandArgs& args, const GlobalOptions& gl
     // a directory, a device or an input): a typo is bad usage before any rendering.
     checkImageExtension("--output", args.output, {"exr", "png"});
     checkImageExtension("--png", args.png, {"png"});
+    render::ImageOptions rows;
+    applyImageOptions(args, rows);
+    try {
+        render::imageRows(rows, args.height > 0 ? args.height : scene.camera.height);
+    } catch (const std::invalid_argument& e) {
+        throw CLI::ValidationError("--rows", e.what());
+    }
     for (const auto& w : scene.warnings) warning(global, w);
     return scene;
 }

@@ -186,7 +186,7 @@ Pipeline loadPipeline(const fs::path& file) {
     for (std::size_t i = 0; i < renders.size(); ++i) {
         const toml::table& t = *renders[i];
         const std::string path = indexed("render", i);
-        reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading", "hybrid", "level_fit", "approximations", "renderer", "mode"});
+        reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading", "hybrid", "level_fit", "approximations", "renderer", "mode", "tiles"});
         RenderStep s;
         s.name = reader.string(t, path, "name", {});
         checkName(reader, TomlReader::join(path, "name"), s.name, renderNames);
@@ -220,6 +220,11 @@ Pipeline loadPipeline(const fs::path& file) {
         s.approximations = reader.choice(t, path, "approximations", std::string("default"), {"default", "exact"});
         s.renderer = reader.choice(t, path, "renderer", std::string("texel"), {"texel", "reference"});
         s.mode = reader.choice(t, path, "mode", std::string("embedded"), {"embedded", "deformed"});
+        // Tiles of rows: no more than the image has rows (the scene's camera unless `height`).
+        s.tiles = int(reader.integer(t, path, "tiles", 1, 1, RenderStep::kMaxTiles));
+        if (const int rows = s.height > 0 ? s.height : scene.camera.height; s.tiles > rows)
+            reader.fail(TomlReader::join(path, "tiles"),
+                        std::to_string(s.tiles) + " tiles of rows, more than the image's " + std::to_string(rows) + " rows");
         if (s.renderer == "reference") {
             // The reference draws each texel's source mesh: a bound texel brings the pipeline's
             // source, an unbound one needs `source =` in the scene.

@@ -316,10 +316,13 @@ std::string stageFigures(const StageRecord& s) {
     } else if (s.kind == "build") {
         f << (d.contains("levels") ? d["levels"].size() : 0) << " levels, " << count("stored_nodes")
           << " nodes stored, compression " << significant(100 * number("compression")) << " %";
-    } else if (s.kind == "render") {
+    } else if (s.kind == "render" || s.kind == "tile") {
+        // A tile's stats are a render's of its rows; an assembled render's, its tiles' summed.
         const Json rays = d.value("rays", Json::object());
-        f << d.value("renderer", std::string()) << ", " << d.value("width", 0) << "×" << d.value("height", 0) << ", "
-          << d.value("spp", 0) << " spp, " << significant(rays.value("primary", 0.0) / 1e6) << " M primary and "
+        f << d.value("renderer", std::string()) << ", " << d.value("width", 0) << "×" << d.value("height", 0);
+        if (d.contains("row_begin")) f << " rows " << d.value("row_begin", 0) << "–" << d.value("row_end", 0);
+        if (d.contains("tiles")) f << " from " << d.value("tiles", 0) << " tiles";
+        f << ", " << d.value("spp", 0) << " spp, " << significant(rays.value("primary", 0.0) / 1e6) << " M primary and "
           << significant(rays.value("shadow", 0.0) / 1e6) << " M shadow rays";
     } else if (s.kind == "compare") {
         f << d.value("a", std::string()) << " against " << d.value("b", std::string()) << ": RMSE "

@@ -193,7 +193,7 @@ void createFolder(const fs::path& folder) {
 // the lock is this run's alone (`removeTemporaries`; a stage run alone shares it with the other
 // stages of its submission, whose temporaries are theirs).
 void prepareFolders(const fs::path& root, bool removeTemporaries) {
-    for (const char* folder : {"", "sources", "samples", "builds", "renders", "compares"}) {
+    for (const char* folder : {"", "sources", "samples", "builds", "tiles", "renders", "compares"}) {
         createFolder(root / folder);
         if (!removeTemporaries) continue;
         // A killed run leaves the hidden temporaries of AtomicOutputFile behind; holding the

@@ -18,6 +18,7 @@
 
 #include "content_hash.h"
 #include "partial_sample.h"
+#include "render_stages.h"
 
 #include <algorithm>
 #include <bit>
@@ -49,28 +50,6 @@ void refuseSharedOutputs(const std::vector<Stage>& stages, const fs::path& root,
     }
 }
 
-render::RenderOptions renderOptions(const RenderStep& step) {
-    render::RenderOptions o;
-    o.width = step.width;
-    o.height = step.height;
-    o.spp = step.spp;
-    o.lodBias = step.lodBias;
-    o.hybrid = step.hybrid;
-    o.fitLevels = step.levelFit;
-    if (step.approximations == "exact") o.approximations = render::ApproximationBudget::exact();
-    o.shading = step.shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
-    return o;
-}
-
-render::ReferenceOptions referenceOptions(const RenderStep& step) {
-    render::ReferenceOptions o;
-    o.width = step.width;
-    o.height = step.height;
-    o.spp = step.spp;
-    o.mode = step.mode == "deformed" ? render::ReferenceMode::Deformed : render::ReferenceMode::Embedded;
-    return o;
-}
-
 std::string readText(const fs::path& file) {
     std::ifstream in(file, std::ios::binary);
     std::ostringstream s;
@@ -88,6 +67,7 @@ struct GraphBuilder {
     std::vector<Omission>& leftOut;
     std::map<std::string, std::uint32_t> resolution;  // texel → sampled resolution; absent: not built
     std::map<std::string, std::size_t> sourceIndex, sampleIndex, buildIndex, renderIndex;
+    std::map<std::string, std::vector<std::size_t>> tileIndex;  // render → its tile stages
     const std::string header = std::string("vtex ") + kVersion + "\n";
 
     bool isBuilt(const std::string& texel) const { return resolution.count(texel) > 0; }
@@ -95,6 +75,9 @@ struct GraphBuilder {
     void addSources();
     void addSamples();
     void addBuilds();
+    RenderSpec renderSpec(const RenderStep& step) const;
+    std::vector<std::size_t> renderInputs(const RenderSpec& spec) const;
+    void addTiles();
     void addRenders();
     void addCompares();
 };
@@ -308,91 +291,72 @@ void GraphBuilder::addBuilds() {
     }
 }
 
+RenderSpec GraphBuilder::renderSpec(const RenderStep& step) const {
+    RenderSpec spec{step, {}, header};
+    // Bindings of texels that were left out name texels the scene does not use.
+    for (const auto& binding : step.texels)
+        if (isBuilt(binding.second)) spec.bindings.push_back(binding);
+    return spec;
+}
+
+std::vector<std::size_t> GraphBuilder::renderInputs(const RenderSpec& spec) const {
+    std::vector<std::size_t> inputs;
+    for (const auto& [sceneTexel, texel] : spec.bindings) {
+        inputs.push_back(buildIndex.at(texel));
+        inputs.push_back(sourceIndex.at(std::find_if(pipeline.texels.begin(), pipeline.texels.end(),
+                                                     [&](const TexelStep& t) { return t.name == texel; })
+                                            ->source));
+    }
+    return inputs;
+}
+
+void GraphBuilder::addTiles() {
+    std::vector<Stage>& stages = this->stages;  // the closures capture the vector, not the builder
+    MemoryBudget& budget = this->budget;
+    // All tiles of all renders form one wave, before the renders that assemble them.
+    for (const RenderStep& step : pipeline.renders) {
+        if (step.tiles <= 1) continue;
+        const RenderSpec spec = renderSpec(step);
+        for (int k = 0; k < step.tiles; ++k) {
+            Stage s{"tile", step.name + "." + std::to_string(k)};
+            s.inputs = renderInputs(spec);
+            s.outputs["image"] = root / "tiles" / (s.name + ".exr");
+            s.outputs["stats"] = root / "tiles" / (s.name + ".stats.json");
+            const std::size_t self = stages.size();
+            tileIndex[step.name].push_back(self);
+            s.describe = [&stages, spec, self, k] {
+                return describeRender(stages, stages[self], spec) + "tile " + std::to_string(k) + " of " +
+                       std::to_string(spec.step.tiles) + "\n";
+            };
+            s.run = [&stages, &budget, spec, k](Stage& me) {
+                return runRender(me, stages, budget, spec, renderTileRows(spec, boundScene(stages, me, spec), k));
+            };
+            stages.push_back(std::move(s));
+        }
+    }
+}
+
 void GraphBuilder::addRenders() {
     std::vector<Stage>& stages = this->stages;  // the closures capture the vector, not the builder
     MemoryBudget& budget = this->budget;
-    const std::string header = this->header;
     for (const RenderStep& step : pipeline.renders) {
+        const RenderSpec spec = renderSpec(step);
         Stage s{"render", step.name};
-        // Bindings of texels that were left out name texels the scene does not use.
-        std::vector<std::pair<std::string, std::string>> bindings;
-        for (const auto& binding : step.texels)
-            if (isBuilt(binding.second)) bindings.push_back(binding);
-        for (const auto& [sceneTexel, texel] : bindings) {
-            s.inputs.push_back(buildIndex.at(texel));
-            s.inputs.push_back(sourceIndex.at(std::find_if(pipeline.texels.begin(), pipeline.texels.end(),
-                                                           [&](const TexelStep& t) { return t.name == texel; })
-                                                  ->source));
-        }
         s.outputs["image"] = root / "renders" / (step.name + ".exr");
         s.outputs["preview"] = root / "renders" / (step.name + ".png");
         s.outputs["stats"] = root / "renders" / (step.name + ".stats.json");
         const std::size_t self = stages.size();
         renderIndex[step.name] = self;
+        if (step.tiles > 1) {  // the render assembles its tiles
+            s.inputs = tileIndex.at(step.name);
+            s.describe = [&stages, spec, self] { return describeAssembly(stages, stages[self], spec); };
+            s.run = [&stages, &budget, spec](Stage& me) { return runAssembly(me, stages, budget, spec); };
+        } else {
+            s.inputs = renderInputs(spec);
+            s.describe = [&stages, spec, self] { return describeRender(stages, stages[self], spec); };
+            s.run = [&stages, &budget, spec](Stage& me) { return runRender(me, stages, budget, spec, {0, 0}); };
+        }
         stages.push_back(std::move(s));
-        // Stages are addressed by index: the vector grows while the graph is built.
-        Stage& r = stages.back();
-        // The scene as this render sees it: bound texels point at the pipeline's artifacts.
-        auto boundScene = [&stages, step, bindings, self] {
-            render::Scene scene = render::loadScene(step.scene);
-            std::size_t input = 0;
-            for (const auto& [sceneTexel, texel] : bindings) {
-                render::TexelDef* found = &scene.texels[sceneTexelIndex(scene, sceneTexel)];
-                found->volume = stages[stages[self].inputs[input]].outputs.at("octree");
-                found->source = stages[stages[self].inputs[input + 1]].outputs.at("mesh");
-                input += 2;
-            }
-            return scene;
-        };
-        r.describe = [&stages, step, self, bindings, boundScene, header] {
-            std::ostringstream d;
-            d << header << "render " << step.renderer << " " << step.mode << "\nsize " << step.width << "x" << step.height
-              << " spp " << step.spp << " lod_bias " << step.lodBias << " shading " << step.shading
-              << " hybrid " << step.hybrid << " level_fit " << step.levelFit << "\napproximations "
-              << renderOptions(step).approximations.key() << "\nscene "
-              << hashFile(step.scene) << "\n";
-            const render::Scene scene = boundScene();
-            for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";
-            // The files of the texels the scene itself names, once each; bound texels are the
-            // pipeline's artifacts, whose hashes the inputs give below.
-            std::set<std::size_t> unbound;
-            for (const auto& surface : scene.surfaces)
-                if (surface.texel &&
-                    std::none_of(bindings.begin(), bindings.end(),
-                                 [&](const auto& b) { return b.first == scene.texels[*surface.texel].name; }))
-                    unbound.insert(*surface.texel);
-            for (std::size_t t : unbound) {
-                const render::TexelDef& texel = scene.texels[t];
-                d << "texel " << t << " " << hashFile(texel.volume);
-                if (step.renderer == "reference" && !texel.source.empty()) d << " source " << hashFile(texel.source);
-                d << "\n";
-            }
-            for (std::size_t input : stages[self].inputs)
-                for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
-            return d.str();
-        };
-        r.run = [&budget, step, boundScene](Stage& self) {
-            Progress& quiet = *self.progress;
-            const render::Scene scene = boundScene();
-            const bool reference = step.renderer == "reference";
-            const render::ReferenceOptions referenceSettings = referenceOptions(step);
-            const render::RenderOptions renderSettings = renderOptions(step);
-            const int width = step.width > 0 ? step.width : scene.camera.width;
-            const int height = step.height > 0 ? step.height : scene.camera.height;
-            const auto held = budget.reserve(step.scene, "rendering " + std::to_string(width) + "x" + std::to_string(height),
-                                             reference ? render::estimateReferenceMemory(scene, referenceSettings)
-                                                       : render::estimateRenderMemory(scene, renderSettings));
-            const render::RenderResult result = reference ? render::renderReference(scene, referenceSettings, quiet)
-                                                          : render::renderScene(scene, renderSettings, quiet);
-            // The image, its preview and its stats all or none (commitAll).
-            AtomicOutputFile image(self.outputs.at("image")), preview(self.outputs.at("preview")),
-                stats(self.outputs.at("stats"));
-            render::writeExr(result.image, image);
-            render::writePng(result.image, preview);
-            render::writeStatsJson(result.stats, stats);
-            commitAll({&image, &preview, &stats});
-            return Json::parse(readText(self.outputs.at("stats")));
-        };
     }
 }
 
@@ -439,11 +403,12 @@ fs::path manifestPath(const Stage& stage, const fs::path& root) {
 
 void buildStageGraph(const Pipeline& pipeline, const fs::path& root, bool force, MemoryBudget& budget,
                      std::vector<Stage>& stages, std::vector<Omission>& leftOut) {
-    GraphBuilder graph{pipeline, root, force, budget, stages, leftOut, {}, {}, {}, {}, {}};
+    GraphBuilder graph{pipeline, root, force, budget, stages, leftOut, {}, {}, {}, {}, {}, {}};
     graph.fitResolutions();
     graph.addSources();
     graph.addSamples();
     graph.addBuilds();
+    graph.addTiles();
     graph.addRenders();
     graph.addCompares();
     refuseSharedOutputs(stages, root, pipeline.file);

@@ -1,4 +1,4 @@
-// The stages a pipeline file asks for, as a graph in waves (sources, samples, builds, renders,
+// The stages a pipeline file asks for, as a graph in waves (sources, samples, builds, tiles, renders,
 // compares): each stage's parameters and inputs (`describe`, hashed into its cache key), its
 // outputs, and the work that makes them. runner.cpp runs the graph, or only tells what it would
 // run (a dry run).

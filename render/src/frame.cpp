@@ -8,7 +8,22 @@
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <stdexcept>
 #include <string>
+#include <tuple>
+
+namespace vtex::render {
+
+std::pair<int, int> imageRows(const ImageOptions& options, int height) {
+    if (options.rowBegin == 0 && options.rowEnd == 0) return {0, height};
+    if (options.rowBegin < 0 || options.rowBegin >= options.rowEnd || options.rowEnd > height)
+        throw std::invalid_argument("rows " + std::to_string(options.rowBegin) + ":" + std::to_string(options.rowEnd) +
+                                    " are not a range within the image's " + std::to_string(height) +
+                                    " rows (0 <= begin < end <= height)");
+    return {options.rowBegin, options.rowEnd};
+}
+
+}  // namespace vtex::render
 
 namespace vtex::render::detail {
 
@@ -118,6 +133,13 @@ std::pair<int, int> imageSize(const Scene& scene, int width, int height) {
     return {w, h};
 }
 
+ImageFrame imageFrame(const Scene& scene, const ImageOptions& options) {
+    ImageFrame frame;
+    std::tie(frame.width, frame.height) = imageSize(scene, options.width, options.height);
+    std::tie(frame.rowBegin, frame.rowEnd) = imageRows(options, frame.height);
+    return frame;
+}
+
 CameraRays::CameraRays(const Camera& camera, int width, int height)
     : mOrigin(camera.position),
       mForward((camera.lookAt - camera.position).normalized()),
@@ -127,15 +149,17 @@ CameraRays::CameraRays(const Camera& camera, int width, int height)
       mAspect(double(width) / double(height)) {}
 
 RenderStats summarize(const std::vector<Counters>& tileCounters, const SceneGeometry& geometry, int threads,
-                      int width, int height, int spp, double wallSeconds, double loadSeconds) {
+                      const ImageFrame& frame, int spp, double wallSeconds, double loadSeconds) {
     Counters total;
     for (const Counters& c : tileCounters) total.add(c);
     RenderStats st;
     st.wallSeconds = wallSeconds;
     st.loadSeconds = loadSeconds;
     st.threads = threads;
-    st.width = width;
-    st.height = height;
+    st.width = frame.width;
+    st.height = frame.height;
+    st.rowBegin = frame.rowBegin;
+    st.rowEnd = frame.rowEnd;
     st.spp = spp;
     st.faces = geometry.faces;
     st.cells = geometry.cells;
@@ -200,7 +224,10 @@ void countVtoBytes(const TexelDef& texel, const octree::Octree& tree, RenderStat
 std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& options) {
     // The factors are stated and measured in renderer.h (estimateRenderMemory).
     const int w = options.width > 0 ? options.width : scene.camera.width;
-    const int h = options.height > 0 ? options.height : scene.camera.height;
+    // A row range holds only its rows (ImageOptions::rowBegin).
+    const int h = options.rowEnd > options.rowBegin ? options.rowEnd - options.rowBegin
+                  : options.height > 0              ? options.height
+                                                    : scene.camera.height;
     double bytes = double(std::max(w, 0)) * double(std::max(h, 0)) * (options.aovs ? 30.0 : 22.0) + double(16 << 20);
     std::vector<bool> used(scene.texels.size(), false);
     for (const SurfaceDef& s : scene.surfaces) {

@@ -60,6 +60,16 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors = false)
 /// The image size a render makes (the options', else the camera's). Throws vtex::InputError.
 std::pair<int, int> imageSize(const Scene& scene, int width, int height);
 
+/// The full image a render's pixels belong to, and the rows of it the render makes
+/// (ImageOptions::rowBegin): camera rays and sample positions come from the full image.
+struct ImageFrame {
+    int width = 0, height = 0;
+    int rowBegin = 0, rowEnd = 0;
+    int rows() const { return rowEnd - rowBegin; }
+};
+/// imageSize and imageRows of `options`. Throws as they do.
+ImageFrame imageFrame(const Scene& scene, const ImageOptions& options);
+
 /// The image and the scene's files, as both renderers' estimates count them (renderer.h,
 /// estimateRenderMemory, states the factors).
 std::uint64_t imageAndSceneMemory(const Scene& scene, const ImageOptions& options);
@@ -115,7 +125,7 @@ inline std::vector<std::string> renderWarnings(const Scene& scene, const std::ve
 
 /// The statistics every render reports, from the counters summed over the tiles.
 RenderStats summarize(const std::vector<Counters>& tileCounters, const SceneGeometry& geometry, int threads,
-                      int width, int height, int spp, double wallSeconds, double loadSeconds);
+                      const ImageFrame& frame, int spp, double wallSeconds, double loadSeconds);
 
 /// Tiled reference coordinates of cell coordinates r of a textured face (its CellMap: the
 /// repeat or sub-rectangle, and the face's perturbation).
@@ -279,14 +289,17 @@ inline float storedRadiance(double radiance, Counters& counters) {
     return float(radiance);
 }
 
-/// Renders every pixel with `pixel(x, y, counters)` in 16×16 tiles on `threads` TBB workers
-/// (the pixel value does not depend on which thread computes it), with progress per tile.
+/// Renders the rows [frame.rowBegin, frame.rowEnd) of the full image with `pixel(x, y, counters)`
+/// (y the full image's row) into `image` (those rows alone, image row 0 = frame.rowBegin), in
+/// 16×16 tiles on `threads` TBB workers, with progress per tile. A pixel's value depends on its
+/// own (x, y) alone, not on the thread that computes it nor on which other pixels are rendered:
+/// row ranges rendered apart stack into the whole render exactly (tests/render/row_range_test.cpp).
 template <class PixelFunction>
-void renderTiles(Image& image, int threads, Progress& progress, std::vector<Counters>& tileCounters,
-                 PixelFunction&& pixel) {
+void renderTiles(Image& image, const ImageFrame& frame, int threads, Progress& progress,
+                 std::vector<Counters>& tileCounters, PixelFunction&& pixel) {
     constexpr int kTile = 16;
-    const int width = image.width, height = image.height;
-    const int tilesX = (width + kTile - 1) / kTile, tilesY = (height + kTile - 1) / kTile;
+    const int width = image.width, rows = image.height;
+    const int tilesX = (width + kTile - 1) / kTile, tilesY = (rows + kTile - 1) / kTile;
     const int tiles = tilesX * tilesY;
     tileCounters.assign(std::size_t(tiles), Counters{});
     progress.start("render", std::uint64_t(tiles));
@@ -297,9 +310,9 @@ void renderTiles(Image& image, int threads, Progress& progress, std::vector<Coun
                 if (progress.wasInterrupted()) return;
                 Counters& counters = tileCounters[std::size_t(tileIndex)];
                 const int x0 = (tileIndex % tilesX) * kTile, y0 = (tileIndex / tilesX) * kTile;
-                for (int y = y0; y < std::min(y0 + kTile, height); ++y) {
+                for (int y = y0; y < std::min(y0 + kTile, rows); ++y) {
                     for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
-                        const PixelValue value = pixel(x, y, counters);
+                        const PixelValue value = pixel(x, frame.rowBegin + y, counters);
                         const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
                         for (int c = 0; c < 3; ++c) image.rgba[4 * i + std::size_t(c)] = storedRadiance(value.radiance[c], counters);
                         image.rgba[4 * i + 3] = float(value.alpha);

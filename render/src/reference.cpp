@@ -190,9 +190,10 @@ std::uint64_t estimateReferenceMemory(const Scene& scene, const ReferenceOptions
 
 RenderResult renderReference(const Scene& scene, const ReferenceOptions& options, Progress& progress) {
     const auto loadStart = std::chrono::steady_clock::now();
-    const auto [width, height] = detail::imageSize(scene, options.width, options.height);
+    const detail::ImageFrame frame = detail::imageFrame(scene, options);
+    const int width = frame.width, height = frame.height;
     const int strata = std::max(1, int(std::ceil(std::sqrt(double(std::max(options.spp, 1))))));
-    checkMemoryEstimate(scene.file, "rendering " + std::to_string(width) + "x" + std::to_string(height),
+    checkMemoryEstimate(scene.file, "rendering " + std::to_string(width) + "x" + std::to_string(frame.rows()),
                         estimateReferenceMemory(scene, options), options.maxMemoryBytes);
     const bool deformedMode = options.mode == ReferenceMode::Deformed;
     const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene, deformedMode);
@@ -226,11 +227,11 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     const auto renderStart = std::chrono::steady_clock::now();
     const double loadSeconds = std::chrono::duration<double>(renderStart - loadStart).count();
 
-    Image image(width, height, options.aovs);
+    Image image(width, frame.rows(), options.aovs);
     const int threads = detail::resolveThreads(options.threads);
     std::vector<Counters> tileCounters;
     const int samples = strata * strata;
-    detail::renderTiles(image, threads, progress, tileCounters, [&](int x, int y, Counters& counters) {
+    detail::renderTiles(image, frame, threads, progress, tileCounters, [&](int x, int y, Counters& counters) {
         detail::PixelValue value;
         double depth = 0;
         int depthCount = 0;
@@ -255,7 +256,7 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
 
     const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - renderStart).count();
     RenderResult result;
-    result.stats = detail::summarize(tileCounters, geometry, threads, width, height, samples, wallSeconds, loadSeconds);
+    result.stats = detail::summarize(tileCounters, geometry, threads, frame, samples, wallSeconds, loadSeconds);
     result.stats.renderer = deformedMode ? "reference-deformed" : "reference-embedded";
     result.stats.referenceTriangles = deformedMode ? deformed->triangleCount() : sourceTriangles;
     result.stats.vtoBytesRead = vtoBytes.vtoBytesRead;

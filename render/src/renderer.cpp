@@ -142,6 +142,8 @@ public:
         return state;
     }
 
+    const ShadowQueries& shadows() const { return mShadows; }
+
 private:
     static void opaque(PathState& state, double t, const Color& radiance) {
         state.radiance += state.transmittance * radiance;
@@ -288,9 +290,10 @@ std::uint64_t estimateRenderMemory(const Scene& scene, const RenderOptions& opti
 RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progress& progress) {
     const auto loadStart = std::chrono::steady_clock::now();
     RenderResult result;
-    const auto [width, height] = detail::imageSize(scene, options.width, options.height);
+    const detail::ImageFrame frame = detail::imageFrame(scene, options);
+    const int width = frame.width, height = frame.height;
     const int strata = std::max(1, int(std::ceil(std::sqrt(double(std::max(options.spp, 1))))));
-    checkMemoryEstimate(scene.file, "rendering " + std::to_string(width) + "x" + std::to_string(height),
+    checkMemoryEstimate(scene.file, "rendering " + std::to_string(width) + "x" + std::to_string(frame.rows()),
                         estimateRenderMemory(scene, options), options.maxMemoryBytes);
 
     const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene);
@@ -303,10 +306,10 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
     const auto renderStart = std::chrono::steady_clock::now();
     const double loadSeconds = std::chrono::duration<double>(renderStart - loadStart).count();
 
-    Image image(width, height, options.aovs);
+    Image image(width, frame.rows(), options.aovs);
     const int threads = detail::resolveThreads(options.threads);
     std::vector<Counters> tileCounters;
-    detail::renderTiles(image, threads, progress, tileCounters, [&](int x, int y, Counters& counters) {
+    detail::renderTiles(image, frame, threads, progress, tileCounters, [&](int x, int y, Counters& counters) {
         detail::PixelValue value;
         double depth = 0, levelSum = 0, levelWeight = 0;
         int depthCount = 0;
@@ -334,7 +337,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
     });
 
     const double wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - renderStart).count();
-    result.stats = detail::summarize(tileCounters, geometry, threads, width, height, strata * strata, wallSeconds, loadSeconds);
+    result.stats = detail::summarize(tileCounters, geometry, threads, frame, strata * strata, wallSeconds, loadSeconds);
     for (std::size_t i = 0; i < texels.size(); ++i) {
         const TexelRuntime& t = texels[i];
         if (!t.volume) continue;
@@ -345,6 +348,10 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
     result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
     result.image = std::move(image);
     result.warnings = detail::renderWarnings(scene, tileCounters);
+    if (integrator.shadows().chainCut())
+        result.warnings.push_back("a shadow-lattice chain crossed more than 256 cells and was cut with an exact ray where it "
+                                  "had got to: the image may differ slightly with the threads or the rows rendered "
+                                  "(docs/render.md, \"Shadows\")");
     return result;
 }
 
@@ -363,6 +370,11 @@ void writeStatsJson(const RenderStats& s, AtomicOutputFile& out) {
     j["width"] = s.width;
     j["height"] = s.height;
     j["spp"] = s.spp;
+    // Only a partial render says which rows it made: a whole render's stats.json is as before.
+    if (s.rowEnd - s.rowBegin < s.height) {
+        j["row_begin"] = s.rowBegin;
+        j["row_end"] = s.rowEnd;
+    }
     j["faces"] = s.faces;
     j["cells"] = s.cells;
     j["rays"] = {{"primary", s.primaryRays}, {"shadow", s.shadowRays}};

@@ -17,6 +17,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -135,6 +136,8 @@ public:
                                 localScale(prim, r) * spacing, primIndex, r, uncounted);
         };
         const LevelChoice choice = chooseLevel(spacing, mOptions.lodBias, texel.volume->maxLevel());
+        // The one place a pixel can depend on the others rendered: the render warns (chainCut).
+        if (depth >= kMaxChain) mChainCut.store(true, std::memory_order_relaxed);
         if (depth >= kMaxChain || texel.meshWeight(choice.requested) > 0 ||
             !mOptions.approximations.chainLatticeNodes)
             return exactFrom(rn);
@@ -150,6 +153,10 @@ public:
         return m.transmittance *
                cachedShadow(slot, next.prim, CellAdjacency::toNeighbour(next, m.exitFace, m.end), l, depth + 1);
     }
+
+    // Whether some lattice chain was cut at kMaxChain cells (nodeTransmittance): then the image
+    // may depend on the order of the tiles and on which rows were rendered.
+    bool chainCut() const { return mChainCut.load(std::memory_order_relaxed); }
 
     // The exact path: one ray toward the light.
     double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
@@ -271,6 +278,7 @@ private:
     const std::vector<TexelRuntime>& mTexels;
     LightTransmittanceCache mLightCache = makeLightCache();
     CellAdjacency mAdjacency = mLightCache.empty() ? CellAdjacency() : CellAdjacency(mTracer.prims());
+    mutable std::atomic<bool> mChainCut{false};
 };
 
 }  // namespace vtex::render::detail

@@ -241,3 +241,34 @@ TEST(RenderCli, ReadsOnlyTheLevelsItUsesAndADamagedUsedLevelExitsThree) {
     EXPECT_EQ(inspect.exitStatus, 3) << inspect.err;
     EXPECT_NE((inspect.out + inspect.err).find("LV04"), std::string::npos) << inspect.out << inspect.err;
 }
+
+// --rows A:B writes those rows of the image, exactly as the whole render has them, and says which
+// in stats.json; a range that is malformed, empty or past the image's height is bad usage.
+TEST(RenderCli, RowsRenderThoseRowsOfTheWholeImage) {
+    const fs::path dir = makeSceneDir("rows");
+    const std::string scene = (dir / "scene.toml").string();
+    const auto whole = runVtex({"render", scene, "-o", (dir / "whole.exr").string(), "--quiet"});
+    ASSERT_EQ(whole.exitStatus, 0) << whole.err;
+    const auto part = runVtex({"render", scene, "-o", (dir / "part.exr").string(), "--rows", "7:19", "--stats",
+                               (dir / "part.json").string(), "--quiet"});
+    ASSERT_EQ(part.exitStatus, 0) << part.err;
+    const Image all = readExr(dir / "whole.exr"), rows = readExr(dir / "part.exr");
+    ASSERT_EQ(rows.width, 40);
+    ASSERT_EQ(rows.height, 12);
+    const std::vector<float> expected(all.rgba.begin() + 7 * 40 * 4, all.rgba.begin() + 19 * 40 * 4);
+    EXPECT_EQ(rows.rgba, expected);
+    const std::string stats = vtex::test::readText(dir / "part.json");
+    EXPECT_NE(stats.find("\"row_begin\": 7"), std::string::npos) << stats;
+    EXPECT_NE(stats.find("\"row_end\": 19"), std::string::npos) << stats;
+    EXPECT_NE(stats.find("\"height\": 30"), std::string::npos) << stats;
+    for (const char* command : {"render", "reference"})
+        for (const char* bad : {"7", "7:", "a:9", "9:9", "9:3", "-1:4", "0:31"}) {
+            const auto r = runVtex({command, scene, "-o", (dir / "bad.exr").string(), "--rows", bad});
+            EXPECT_EQ(r.exitStatus, 2) << command << " --rows " << bad << ": " << r.err;
+            EXPECT_NE(r.err.find("--rows"), std::string::npos) << r.err;
+            EXPECT_FALSE(fs::exists(dir / "bad.exr"));
+        }
+    // The image's height is the one --height sets.
+    const auto shorter = runVtex({"render", scene, "-o", (dir / "bad.exr").string(), "--height", "20", "--rows", "0:25"});
+    EXPECT_EQ(shorter.exitStatus, 2) << shorter.err;
+}

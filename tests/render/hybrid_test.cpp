@@ -1,6 +1,7 @@
 // The mesh/volume hybrid and the light count (issue 12): near footprints trace the texel's
 // source mesh and agree with the reference renderer, the switch shows no step, every light
 // lights every voxel.
+#include "bush_field.h"
 #include "fixtures.h"
 
 #include <vtex/octree/chord_transmittance.h>
@@ -17,41 +18,6 @@ using namespace vtex::render;
 using namespace vtex::render::test;
 
 namespace {
-
-struct SourcedTexel {
-    std::shared_ptr<const vtex::ingest::TriangleMesh> mesh;
-    std::shared_ptr<const vtex::octree::Octree> tree;
-};
-
-SourcedTexel makeBush(int leaves, int resolution) {
-    vtex::sampler::PatternOptions pattern;
-    pattern.count = leaves;
-    auto mesh = std::make_shared<const vtex::ingest::TriangleMesh>(vtex::sampler::makePattern("bush", pattern));
-    vtex::sampler::SampleOptions sampling;
-    sampling.resolution = resolution;
-    vtex::NullProgress progress;
-    const auto volume = vtex::sampler::sampleMesh(*mesh, sampling, progress);
-    return SourcedTexel{mesh, std::make_shared<const vtex::octree::Octree>(vtex::octree::buildOctree(volume, {}, progress))};
-}
-
-// A small bush (400 leaves of the `bush` pattern) sampled at 64³: the benchmark's texel, scaled
-// down so that a test renders in well under a second.
-const SourcedTexel& smallBush() {
-    static const SourcedTexel texel = makeBush(400, 64);
-    return texel;
-}
-
-// A 3×3 field of bushes on a ground plane, Lambert only, seen from `eye`.
-Scene bushField(const Eigen::Vector3d& eye, int size = 64, const SourcedTexel& bush = smallBush()) {
-    Scene scene = baseScene(eye, Eigen::Vector3d(0.5, 0.5, 0.4), 40, size);
-    scene.lights[0].direction = Eigen::Vector3d(-1, -0.5, -1).normalized();
-    const auto texel = addTexel(scene, bush.tree);
-    scene.texels[texel].sourceData = bush.mesh;
-    scene.texels[texel].material.specular = Color::Zero();
-    addSurface(scene, gridMesh(-1, -1, 2, 2, 0, 3), texel, 1.0);
-    scene.surfaces.back().material.diffuse = Color(0.35, 0.28, 0.2);
-    return scene;
-}
 
 Color imageMean(const Image& image) {
     Color sum = Color::Zero();

@@ -10,8 +10,9 @@
 /// artifact whose content no longer matches its manifest (corrupted, edited) is rebuilt.
 ///
 /// Layout of the output directory: sources/<name>.glb, texels/<name>.vtl and .vto,
-/// renders/<name>.exr/.png/.stats.json, compares/<name>.json and .diff.png, each with a
-/// <name>.manifest.json; report.json and report.html at the top.
+/// tiles/<render>.<k>.exr/.stats.json (renders split into tiles), renders/<name>.exr/.png/.stats.json,
+/// compares/<name>.json and .diff.png, each with a <name>.manifest.json; report.json and
+/// report.html at the top.
 #pragma once
 
 #include <vtex/core/progress.h>
@@ -77,6 +78,13 @@ struct RenderStep {
     /// their volumes; lod_bias and shading do not apply)
     std::string renderer = "texel";
     std::string mode = "embedded";      ///< reference renders: embedded | deformed
+    /// Above 1: the render is split into this many tile stages of image rows (kind "tile", named
+    /// "<render>.<k>", tile k the rows [k·H/N, (k+1)·H/N) of the H rows), each rendering its rows
+    /// alone (render::ImageOptions::rowBegin) into tiles/<render>.<k>.exr and .stats.json, and the
+    /// render's own stage assembles them into the image, bit for bit the unsplit render's, and
+    /// merges their statistics (docs/pipelines.md, "Tiles"). 1 to kMaxTiles, and at most H.
+    int tiles = 1;
+    static constexpr int kMaxTiles = 256;
 };
 
 /// `b` is the truth `a` is measured against: the report's error-against-run-time table groups
@@ -146,7 +154,7 @@ struct RunOptions {
 };
 
 struct StageRecord {
-    std::string kind;                   ///< source | texel | render | compare
+    std::string kind;                   ///< source | sample | build | tile | render | compare
     std::string name;
     std::string key;                    ///< the content hash that keys the outputs (hex)
     enum class Status { Ran, Cached, Failed, Skipped } status = Status::Skipped;

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vtex {
@@ -44,6 +45,12 @@ struct ImageOptions {
     int spp = 1;          ///< samples per pixel (a √spp × √spp grid, rounded up)
     int threads = 0;      ///< 0: all hardware threads
     bool aovs = false;    ///< fill Image::depth (and, texel renders, Image::level)
+    /// Render only the rows [rowBegin, rowEnd) of the full image (row 0 at the top): the camera
+    /// rays and every pixel's samples are those of the full image, and the Image holds just these
+    /// rows (width × (rowEnd − rowBegin)), so that the row ranges of a split render stacked give
+    /// the whole render exactly (a pixel does not depend on which others are rendered). 0/0:
+    /// every row. Checked by imageRows.
+    int rowBegin = 0, rowEnd = 0;
     /// Refuse (vtex::MemoryLimitError, before anything is loaded) when the renderer's estimate
     /// (estimateRenderMemory, estimateReferenceMemory) exceeds this; 0: no limit. The deformed
     /// reference checks its triangles against it too.
@@ -122,7 +129,10 @@ struct RenderStats {
     double wallSeconds = 0;   ///< the whole render, scene loading excluded
     double loadSeconds = 0;   ///< reading meshes and octrees, building the BVH
     int threads = 0;
-    int width = 0, height = 0, spp = 0;
+    int width = 0, height = 0, spp = 0;  ///< the full image's size, whatever rows were rendered
+    /// The rows rendered, [rowBegin, rowEnd) of `height` (ImageOptions::rowBegin); stats.json
+    /// has them (row_begin, row_end) only when they are not every row.
+    int rowBegin = 0, rowEnd = 0;
     std::uint64_t faces = 0;          ///< base faces (plain and textured)
     std::uint64_t cells = 0;          ///< textured faces
     std::uint64_t primaryRays = 0;
@@ -158,7 +168,7 @@ struct RenderResult {
 };
 
 /// An upper estimate of renderScene's peak memory (bytes), before anything is loaded: 16 MiB, the
-/// image (22 bytes a pixel, 30 with AOVs: the RGBA floats and the encoders' copies), what the
+/// image (the rows rendered: 22 bytes a pixel, 30 with AOVs: the RGBA floats and the encoders' copies), what the
 /// scene loads, from its files' sizes without reading them (base meshes 10× their file, octrees
 /// and source meshes 3×), and the shadow lattices' cap (256 MiB) when a texel meets a
 /// directional light. `bench/memory_estimates.py build/apps/vtex/vtex /tmp/mem` measured (at
@@ -169,11 +179,18 @@ struct RenderResult {
 /// tests/cli/memory_limit_test.cpp checks it against measured peaks.
 std::uint64_t estimateRenderMemory(const Scene& scene, const RenderOptions& options);
 
+/// The rows [first, second) that `options` asks for of an image `height` rows tall: every row
+/// for rowBegin = rowEnd = 0. Throws std::invalid_argument unless 0 ≤ rowBegin < rowEnd ≤ height
+/// (a caller's error: the range is not part of the scene).
+std::pair<int, int> imageRows(const ImageOptions& options, int height);
+
 /// Loads what the scene references (meshes, octrees), builds the BVH and renders. Throws
-/// vtex::InputError for bad scene content (file named), vtex::IoError.
+/// vtex::InputError for bad scene content (file named), vtex::IoError; std::invalid_argument for a
+/// bad row range (imageRows), before anything is loaded.
 RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progress& progress);
 
-/// stats.json: wall time, threads, rays, voxels visited, level histogram, mean level.
+/// stats.json: wall time, threads, rays, voxels visited, level histogram, mean level; the row
+/// range (row_begin, row_end) when only some rows were rendered.
 void writeStatsJson(const RenderStats& stats, const std::filesystem::path& file);
 /// The same into an output the caller commits (AtomicOutputFile, commitAll).
 void writeStatsJson(const RenderStats& stats, AtomicOutputFile& out);
