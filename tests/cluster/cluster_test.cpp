@@ -111,7 +111,8 @@ Json jobsRecord(const fs::path& out) { return Json::parse(vtex::test::readText(o
 
 std::set<std::string> submittedStages(const fs::path& out) {
     std::set<std::string> stages;
-    for (const Json& j : jobsRecord(out)["jobs"]) stages.insert(j["stage"].get<std::string>());
+    const Json record = jobsRecord(out);  // (a temporary's ["jobs"] would not outlive the loop's start)
+    for (const Json& j : record["jobs"]) stages.insert(j["stage"].get<std::string>());
     return stages;
 }
 
@@ -127,7 +128,11 @@ void expectSameOutputs(const fs::path& a, const fs::path& b) {
             ++manifests;
             const Json ma = Json::parse(vtex::test::readText(entry.path()));
             const Json mb = Json::parse(vtex::test::readText(b / kind / file));
-            EXPECT_EQ(ma["key"], mb["key"]) << kind << "/" << file;
+            // An assembled render's key holds its tiles' stats, and so their timings: only its
+            // outputs can be compared.
+            if (ma["details"].value("tiles", 1) == 1) {
+                EXPECT_EQ(ma["key"], mb["key"]) << kind << "/" << file;
+            }
             for (const auto& [role, output] : ma["outputs"].items()) {
                 if (role == "stats") continue;
                 EXPECT_EQ(output["hash"], mb["outputs"][role]["hash"]) << kind << "/" << file << " " << role;
@@ -187,7 +192,8 @@ TEST(Cluster, ACancelledTileIsAllARerunSubmitsWithWhatDependsOnIt) {
     EXPECT_NE(localRun.err.find("still queued or running"), std::string::npos) << localRun.err;
 
     std::string tile, others;
-    for (const Json& j : jobsRecord(out)["jobs"]) {
+    const Json record = jobsRecord(out);
+    for (const Json& j : record["jobs"]) {
         if (j["stage"] == "tile/grass-tiled.2") tile = j["job"];
         else (others += ' ') += j["job"].get<std::string>();
     }
