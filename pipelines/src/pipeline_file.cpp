@@ -176,8 +176,8 @@ Pipeline loadPipeline(const fs::path& file) {
         if ((s.resolution & (s.resolution - 1)) != 0)
             reader.fail(TomlReader::join(path, "resolution"), "must be a power of two");
         if (t.contains("cyclic")) s.cyclic = reader.boolean(t, path, "cyclic", {});
-        s.solid = reader.choice(t, path, "solid", std::string("auto"), {"auto", "on", "off"});
-        s.filter = reader.choice(t, path, "filter", std::string("sggx"), {"neyret", "sggx"});
+        s.solid = reader.enumeration(t, path, "solid", s.solid, sampler::kSolidModeNames);
+        s.filter = reader.enumeration(t, path, "filter", s.filter, octree::kFilterRuleNames);
         s.tolerance = reader.number(t, path, "tolerance", 0.0, 0.0, 1e6);
         pipeline.texels.push_back(s);
     }
@@ -214,18 +214,18 @@ Pipeline loadPipeline(const fs::path& file) {
         s.height = int(reader.integer(t, path, "height", 0, 0, 16384));
         s.spp = int(reader.integer(t, path, "spp", 1, 1, 65536));
         s.lodBias = reader.number(t, path, "lod_bias", 0.0, -16.0, 16.0);
-        s.shading = reader.choice(t, path, "shading", std::string("fast"), {"fast", "reference"});
+        s.shading = reader.enumeration(t, path, "shading", s.shading, render::kShadingModeNames);
         s.hybrid = reader.boolean(t, path, "hybrid", true);
         s.levelFit = reader.boolean(t, path, "level_fit", true);
-        s.approximations = reader.choice(t, path, "approximations", std::string("default"), {"default", "exact"});
-        s.renderer = reader.choice(t, path, "renderer", std::string("texel"), {"texel", "reference"});
-        s.mode = reader.choice(t, path, "mode", std::string("embedded"), {"embedded", "deformed"});
+        s.approximations = reader.enumeration(t, path, "approximations", s.approximations, kApproximationsNames);
+        s.renderer = reader.enumeration(t, path, "renderer", s.renderer, kRendererNames);
+        s.mode = reader.enumeration(t, path, "mode", s.mode, render::kReferenceModeNames);
         // Tiles of rows: no more than the image has rows (the scene's camera unless `height`).
         s.tiles = int(reader.integer(t, path, "tiles", 1, 1, RenderStep::kMaxTiles));
         if (const int rows = s.height > 0 ? s.height : scene.camera.height; s.tiles > rows)
             reader.fail(TomlReader::join(path, "tiles"),
                         std::to_string(s.tiles) + " tiles of rows, more than the image's " + std::to_string(rows) + " rows");
-        if (s.renderer == "reference") {
+        if (s.renderer == Renderer::Reference) {
             // The reference draws each texel's source mesh: a bound texel brings the pipeline's
             // source, an unbound one needs `source =` in the scene.
             for (const std::size_t used : render::usedTexels(scene)) {

@@ -2,14 +2,15 @@
 #include "render_stages.h"
 
 #include <vtex/core/atomic_file.h>
-#include <vtex/core/version.h>
+#include <vtex/core/error.h>
+#include <vtex/render/compare.h>
 #include <vtex/render/image.h>
 
 #include "content_hash.h"
 #include "tile_assembly.h"
 
 #include <algorithm>
-#include <fstream>
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <set>
@@ -21,36 +22,36 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
-std::string readText(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-// The render's own parameters, the lines its keys begin with after the header.
+// Every field of a render step, in the lines its keys begin with after the header or named as
+// not in them: the structured binding stops compiling when RenderStep gains a field, until it is
+// placed here. (`name` names the outputs; the scene and the texels enter by their content, in
+// the keys' later lines; `tiles` in the tile's and the assembly's own lines.)
 std::string renderParameters(const RenderStep& step) {
+    [[maybe_unused]] const auto& [name, scene, texels, width, height, spp, lodBias, shading, hybrid, levelFit,
+                                  approximations, renderer, mode, tiles] = step;
     std::ostringstream d;
-    d << "render " << step.renderer << " " << step.mode << "\nsize " << step.width << "x" << step.height << " spp "
-      << step.spp << " lod_bias " << step.lodBias << " shading " << step.shading << " hybrid " << step.hybrid
-      << " level_fit " << step.levelFit << "\napproximations " << renderOptions(step).approximations.key() << "\n";
+    d << "render " << kRendererNames.name(renderer) << " " << render::kReferenceModeNames.name(mode) << "\nsize " << width
+      << "x" << height << " spp " << spp << " lod_bias " << lodBias << " shading " << render::kShadingModeNames.name(shading)
+      << " hybrid " << hybrid << " level_fit " << levelFit << "\napproximations "
+      << renderOptions(step).approximations.key() << "\n";
     return d.str();
 }
 
-int imageWidth(const RenderStep& step, const render::Scene& scene) { return step.width > 0 ? step.width : scene.camera.width; }
-int imageHeight(const RenderStep& step, const render::Scene& scene) {
-    return step.height > 0 ? step.height : scene.camera.height;
+// The inputs' output hashes, one line each: what ties a stage's key to its inputs' content.
+void describeInputs(std::ostream& d, const std::vector<Stage>& stages, const Stage& self) {
+    for (std::size_t input : self.inputs)
+        for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
 }
 
 // The image, its preview (when the stage has one: a tile has none) and its stats, all or none
 // (commitAll).
-void writeOutputs(const Stage& self, const render::Image& image, const std::function<void(AtomicOutputFile&)>& writeStats) {
-    AtomicOutputFile exr(self.outputs.at("image")), stats(self.outputs.at("stats"));
+void writeOutputs(const Stage& self, const render::Image& image, const std::string& stats) {
+    AtomicOutputFile exr(self.outputs.at("image")), statsFile(self.outputs.at("stats"));
     std::optional<AtomicOutputFile> preview;
     render::writeExr(image, exr);
     if (self.outputs.count("preview")) render::writePng(image, preview.emplace(self.outputs.at("preview")));
-    writeStats(stats);
-    commitAll({&exr, preview ? &*preview : nullptr, &stats});
+    statsFile.stream() << stats;
+    commitAll({&exr, preview ? &*preview : nullptr, &statsFile});
 }
 
 }  // namespace
@@ -63,8 +64,8 @@ render::RenderOptions renderOptions(const RenderStep& step) {
     o.lodBias = step.lodBias;
     o.hybrid = step.hybrid;
     o.fitLevels = step.levelFit;
-    if (step.approximations == "exact") o.approximations = render::ApproximationBudget::exact();
-    o.shading = step.shading == "reference" ? render::ShadingMode::Reference : render::ShadingMode::Fast;
+    if (step.approximations == Approximations::Exact) o.approximations = render::ApproximationBudget::exact();
+    o.shading = step.shading;
     return o;
 }
 
@@ -73,14 +74,14 @@ render::ReferenceOptions referenceOptions(const RenderStep& step) {
     o.width = step.width;
     o.height = step.height;
     o.spp = step.spp;
-    o.mode = step.mode == "deformed" ? render::ReferenceMode::Deformed : render::ReferenceMode::Embedded;
+    o.mode = step.mode;
     return o;
 }
 
-render::Scene boundScene(const std::vector<Stage>& stages, const Stage& self, const RenderSpec& spec) {
-    render::Scene scene = render::loadScene(spec.step.scene);
+render::Scene RenderWork::boundScene(const std::vector<Stage>& stages, const Stage& self) const {
+    render::Scene scene = *mSpec.scene;
     std::size_t input = 0;
-    for (const auto& [sceneTexel, texel] : spec.bindings) {
+    for (const auto& [sceneTexel, texel] : mSpec.bindings) {
         render::TexelDef* found = &scene.texels[sceneTexelIndex(scene, sceneTexel)];
         found->volume = stages[self.inputs[input]].outputs.at("octree");
         found->source = stages[self.inputs[input + 1]].outputs.at("mesh");
@@ -89,67 +90,62 @@ render::Scene boundScene(const std::vector<Stage>& stages, const Stage& self, co
     return scene;
 }
 
-std::string describeRender(const std::vector<Stage>& stages, const Stage& self, const RenderSpec& spec) {
-    const RenderStep& step = spec.step;
+std::string RenderWork::describe(const std::vector<Stage>& stages, const Stage& self) const {
+    const RenderStep& step = mSpec.step;
     std::ostringstream d;
-    d << spec.header << renderParameters(step) << "scene " << hashFile(step.scene) << "\n";
-    const render::Scene scene = boundScene(stages, self, spec);
+    d << mSpec.header << renderParameters(step) << "scene " << hashFile(step.scene) << "\n";
+    const render::Scene scene = boundScene(stages, self);
     for (const auto& surface : scene.surfaces) d << "mesh " << hashFile(surface.mesh) << "\n";
     // The files of the texels the scene itself names, once each; bound texels are the
     // pipeline's artifacts, whose hashes the inputs give below.
     std::set<std::size_t> unbound;
     for (const auto& surface : scene.surfaces)
-        if (surface.texel && std::none_of(spec.bindings.begin(), spec.bindings.end(), [&](const auto& b) {
+        if (surface.texel && std::none_of(mSpec.bindings.begin(), mSpec.bindings.end(), [&](const auto& b) {
                 return b.first == scene.texels[*surface.texel].name;
             }))
             unbound.insert(*surface.texel);
     for (std::size_t t : unbound) {
         const render::TexelDef& texel = scene.texels[t];
         d << "texel " << t << " " << hashFile(texel.volume);
-        if (step.renderer == "reference" && !texel.source.empty()) d << " source " << hashFile(texel.source);
+        if (step.renderer == Renderer::Reference && !texel.source.empty()) d << " source " << hashFile(texel.source);
         d << "\n";
     }
-    for (std::size_t input : self.inputs)
-        for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
+    describeInputs(d, stages, self);
+    // An unsplit render's text is what it was before tiles: its cache stays valid.
+    if (mTile >= 0) d << "tile " << mTile << " of " << step.tiles << "\n";
     return d.str();
 }
 
-Json runRender(Stage& self, const std::vector<Stage>& stages, MemoryBudget& budget, const RenderSpec& spec,
-               std::pair<int, int> rows) {
-    const RenderStep& step = spec.step;
-    Progress& quiet = *self.progress;
-    const render::Scene scene = boundScene(stages, self, spec);
-    const bool reference = step.renderer == "reference";
+Json RenderWork::run(const std::vector<Stage>& stages, const Stage& self) const {
+    const RenderStep& step = mSpec.step;
+    const render::Scene scene = boundScene(stages, self);
+    const std::pair<int, int> rows = mTile >= 0 ? tileRows(mSpec.height(), step.tiles, mTile) : std::pair{0, 0};
+    const bool reference = step.renderer == Renderer::Reference;
     render::ReferenceOptions referenceSettings = referenceOptions(step);
     render::RenderOptions renderSettings = renderOptions(step);
     std::tie(referenceSettings.rowBegin, referenceSettings.rowEnd) = rows;
     std::tie(renderSettings.rowBegin, renderSettings.rowEnd) = rows;
-    std::string what = "rendering " + std::to_string(imageWidth(step, scene)) + "x" + std::to_string(imageHeight(step, scene));
+    std::string what = "rendering " + std::to_string(mSpec.width()) + "x" + std::to_string(mSpec.height());
     if (rows.second > 0) what += " rows " + std::to_string(rows.first) + " to " + std::to_string(rows.second);
-    const auto held = budget.reserve(step.scene, what,
-                                     reference ? render::estimateReferenceMemory(scene, referenceSettings)
-                                               : render::estimateRenderMemory(scene, renderSettings));
-    const render::RenderResult result = reference ? render::renderReference(scene, referenceSettings, quiet)
-                                                  : render::renderScene(scene, renderSettings, quiet);
-    writeOutputs(self, result.image, [&](AtomicOutputFile& stats) { render::writeStatsJson(result.stats, stats); });
-    return Json::parse(readText(self.outputs.at("stats")));
+    const auto held = mBudget.reserve(step.scene, what,
+                                      reference ? render::estimateReferenceMemory(scene, referenceSettings)
+                                                : render::estimateRenderMemory(scene, renderSettings));
+    const render::RenderResult result = reference ? render::renderReference(scene, referenceSettings, *self.progress)
+                                                  : render::renderScene(scene, renderSettings, *self.progress);
+    const std::string stats = render::formatStatsJson(result.stats);
+    writeOutputs(self, result.image, stats);
+    return Json::parse(stats);
 }
 
-std::pair<int, int> renderTileRows(const RenderSpec& spec, const render::Scene& scene, int k) {
-    return tileRows(imageHeight(spec.step, scene), spec.step.tiles, k);
-}
-
-std::string describeAssembly(const std::vector<Stage>& stages, const Stage& self, const RenderSpec& spec) {
+std::string AssemblyWork::describe(const std::vector<Stage>& stages, const Stage& self) const {
     std::ostringstream d;
-    d << spec.header << renderParameters(spec.step) << "assemble " << self.inputs.size() << " tiles\n";
-    for (std::size_t input : self.inputs)
-        for (const auto& [role, hash] : stages[input].outputHashes) d << role << " " << hash << "\n";
+    d << mSpec.header << renderParameters(mSpec.step) << "assemble " << self.inputs.size() << " tiles\n";
+    describeInputs(d, stages, self);
     return d.str();
 }
 
-Json runAssembly(Stage& self, const std::vector<Stage>& stages, MemoryBudget& budget, const RenderSpec& spec) {
-    const render::Scene scene = render::loadScene(spec.step.scene);  // for the image's size
-    const int width = imageWidth(spec.step, scene), height = imageHeight(spec.step, scene);
+Json AssemblyWork::run(const std::vector<Stage>& stages, const Stage& self) const {
+    const int width = mSpec.width(), height = mSpec.height();
     std::vector<fs::path> images, stats;
     for (std::size_t input : self.inputs) {
         images.push_back(stages[input].outputs.at("image"));
@@ -157,12 +153,35 @@ Json runAssembly(Stage& self, const std::vector<Stage>& stages, MemoryBudget& bu
     }
     // The whole image and one tile at a time (RGBA floats, 16 bytes a pixel each), the PNG
     // encoder's copy and 16 MiB besides.
-    const auto held = budget.reserve(spec.step.scene, "assembling " + std::to_string(width) + "x" + std::to_string(height),
-                                     std::uint64_t(width) * std::uint64_t(height) * 38 + (std::uint64_t(16) << 20));
+    const auto held = mBudget.reserve(mSpec.step.scene, "assembling " + std::to_string(width) + "x" + std::to_string(height),
+                                      std::uint64_t(width) * std::uint64_t(height) * 38 + (std::uint64_t(16) << 20));
     const render::Image image = stackTiles(images, width, height);
     const Json merged = mergeTileStats(stats);
-    writeOutputs(self, image, [&](AtomicOutputFile& out) { out.stream() << merged.dump(2) << "\n"; });
+    writeOutputs(self, image, merged.dump(2) + "\n");
     return merged;
+}
+
+std::string CompareWork::describe(const std::vector<Stage>& stages, const Stage& self) const {
+    [[maybe_unused]] const auto& [name, a, b] = mStep;  // a and b enter by their images' content
+    return mHeader + "compare\nheatmap_scale truth_rms\n" + stages[self.inputs[0]].outputHashes.at("image") + "\n" +
+           stages[self.inputs[1]].outputHashes.at("image") + "\n";
+}
+
+Json CompareWork::run(const std::vector<Stage>& stages, const Stage& self) const {
+    const render::Image a = render::readExr(stages[self.inputs[0]].outputs.at("image"));
+    const render::Image b = render::readExr(stages[self.inputs[1]].outputs.at("image"));
+    if (a.width != b.width || a.height != b.height)
+        throw InputError(stages[self.inputs[1]].outputs.at("image"), "size differs from render '" + mStep.a + "'");
+    const render::ImageComparison m = render::compareImages(a, b);
+    // One scale for every comparison against this truth (render::heatMapScale); a black truth
+    // gets errorHeatMap's own fallback of 1, so that the report's bar is the map's.
+    const double truthScale = render::heatMapScale(b), scale = truthScale > 0 ? truthScale : 1.0;
+    render::writePng(render::errorHeatMap(a, b, scale), self.outputs.at("heatmap"));
+    Json metrics = {{"a", mStep.a},      {"b", mStep.b},       {"rmse", m.rmse},
+                    {"ssim", m.ssim},    {"worst_error", m.worstError}, {"heatmap_scale", scale},
+                    {"psnr", std::isfinite(m.psnr) ? Json(m.psnr) : Json(nullptr)}};
+    writeFileAtomically(self.outputs.at("metrics"), metrics.dump(2) + "\n");
+    return metrics;
 }
 
 }  // namespace vtex::pipelines::detail

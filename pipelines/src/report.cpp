@@ -78,18 +78,19 @@ Json errorAgainstTime(const Pipeline& pipeline, const RunReport& report) {
         const RenderStep* step = findRender(pipeline, a);
         if (!step || !renderDetails.count(a)) continue;
         const Json& stats = renderDetails[a];
+        const bool texel = step->renderer == Renderer::Texel;
         std::string filters;
         for (const auto& [sceneTexel, texel] : step->texels)
             for (const TexelStep& t : pipeline.texels)
-                if (t.name == texel) filters += (filters.empty() ? "" : ",") + t.filter;
+                if (t.name == texel) (filters += filters.empty() ? "" : ",") += octree::kFilterRuleNames.name(t.filter);
         Json row = {{"render", a},
                     {"compare", s.name},
-                    {"renderer", step->renderer},
+                    {"renderer", kRendererNames.name(step->renderer)},
                     {"spp", stats.value("spp", step->spp)},
-                    {"lod_bias", step->renderer == "texel" ? Json(step->lodBias) : Json(nullptr)},
-                    {"shading", step->renderer == "texel" ? Json(step->shading) : Json(nullptr)},
-                    {"mode", step->renderer == "reference" ? Json(step->mode) : Json(nullptr)},
-                    {"filter", step->renderer == "texel" ? Json(filters) : Json(nullptr)},
+                    {"lod_bias", texel ? Json(step->lodBias) : Json(nullptr)},
+                    {"shading", texel ? Json(render::kShadingModeNames.name(step->shading)) : Json(nullptr)},
+                    {"mode", texel ? Json(nullptr) : Json(render::kReferenceModeNames.name(step->mode))},
+                    {"filter", texel ? Json(filters) : Json(nullptr)},
                     {"seconds", stats.value("wall_seconds", 0.0) + stats.value("load_seconds", 0.0)},
                     {"rmse", metrics.value("rmse", 0.0)},
                     {"psnr", metrics.value("psnr", Json(nullptr))},

@@ -91,7 +91,7 @@ const RenderStep* findRender(const Pipeline& pipeline, const std::string& name) 
 // a difference compares two texel renders (Fig. 4's levels), neither of which is the truth.
 GroupKind Page::kindOf(const Json& group) const {
     const RenderStep* truth = findRender(mPipeline, group.value("truth", ""));
-    if (truth && truth->renderer == "texel") return GroupKind::Difference;
+    if (truth && truth->renderer == Renderer::Texel) return GroupKind::Difference;
     return group["rows"].size() > 1 ? GroupKind::Study : GroupKind::Figure;
 }
 

@@ -139,7 +139,7 @@ std::vector<PlannedStage> detail::planStages(std::vector<Stage>& stages, const f
             if (out[input].runs && p.reason.empty()) p.reason = "input " + stages[input].kind + " '" + stages[input].name + "' runs first";
         if (p.reason.empty()) {
             try {
-                const std::string description = stage.describe();
+                const std::string description = stage.describe(stages);
                 stage.record.key = hashBytes(description);
                 p.reason = staleReason(stage, root, description);
                 p.runs = !p.reason.empty();
@@ -254,7 +254,7 @@ void runStage(std::vector<Stage>& stages, std::size_t i, const fs::path& root, c
         }
     }
     try {
-        const std::string description = stage.describe();
+        const std::string description = stage.describe(stages);
         stage.record.key = hashBytes(description);
         const std::string why = options.force ? "forced (--force)" : staleReason(stage, root, description);
         if (why.empty()) {
@@ -270,7 +270,7 @@ void runStage(std::vector<Stage>& stages, std::size_t i, const fs::path& root, c
         const std::uint64_t watch = memory.start();
         Json details;
         try {
-            details = stage.run(stage);
+            details = stage.run(stages);
         } catch (...) {
             memory.stop(watch);
             throw;
@@ -316,7 +316,7 @@ void takeInputsFromCache(std::vector<Stage>& stages, std::size_t target, const f
     for (std::size_t i = 0; i < target; ++i) {
         if (!needed[i]) continue;
         Stage& stage = stages[i];
-        const std::string description = stage.describe();
+        const std::string description = stage.describe(stages);
         stage.record.key = hashBytes(description);
         const std::string why = staleReason(stage, root, description);
         if (!why.empty())

@@ -12,34 +12,52 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace vtex::pipelines::detail {
 
-/// What one stage needs to run and what it made.
+struct Stage;
+
+/// One kind of stage's work, one type per kind (texel_stages.h: source, sample, build;
+/// render_stages.h: tile, render, assembly, compare), holding that kind's typed parameters as
+/// the pipeline file gave them. Each kind's key text comes from one function of its step that
+/// names every field of it (a structured binding: a field added to the step does not compile
+/// until that function places it in the key or says why not).
+class StageWork {
+public:
+    virtual ~StageWork() = default;
+    /// The canonical text of the stage's parameters and inputs' content, hashed into its key.
+    virtual std::string describe(const std::vector<Stage>& stages, const Stage& self) const = 0;
+    /// Makes the stage's outputs (each atomically, all or none) from its inputs' outputs and
+    /// returns the details its manifest records.
+    virtual nlohmann::json run(const std::vector<Stage>& stages, const Stage& self) const = 0;
+};
+
+/// One stage of the graph: what it reads and writes, its work, and what running it recorded.
 struct Stage {
     Stage(std::string stageKind, std::string stageName) : kind(std::move(stageKind)), name(std::move(stageName)) {}
 
     std::string kind, name;
     std::vector<std::size_t> inputs;                   ///< indices of the stages it reads
-    std::function<std::string()> describe;             ///< canonical text of parameters and inputs
-    std::function<nlohmann::json(Stage&)> run;         ///< writes the outputs, returns details
     std::map<std::string, std::filesystem::path> outputs;  ///< role → path
+    std::shared_ptr<const StageWork> work;
     // Filled while running:
     StageRecord record;
     std::map<std::string, std::string> outputHashes;   ///< role → content hash
-    /// This stage's work time in the earlier run its manifest records (the ETA's estimate); < 0: none.
-    double earlierSeconds = -1;
     /// Its own progress while it runs (the CLI's bar); set by the runner before run().
     Progress* progress = nullptr;
+
+    std::string describe(const std::vector<Stage>& stages) const { return work->describe(stages, *this); }
+    nlohmann::json run(const std::vector<Stage>& stages) const { return work->run(stages, *this); }
 };
 
 /// <root>/<kind>s/<name>.manifest.json
 std::filesystem::path manifestPath(const Stage& stage, const std::filesystem::path& root);
 
-/// Builds the graph into `stages` (empty; it and `budget` must outlive the stages' closures, which
-/// address each other by index in the vector, so it must not grow after), and the texels it leaves out
+/// Builds the graph into `stages` (empty; `budget` must outlive the stages' work, and stages
+/// address each other by index in the vector), and the texels it leaves out
 /// (not used by any render, or sampled less finely than their resolution) into `leftOut`.
 /// Throws vtex::InputError when two stages would write one file, or a scene cannot be read.
 void buildStageGraph(const Pipeline& pipeline, const std::filesystem::path& root, bool force, MemoryBudget& budget,

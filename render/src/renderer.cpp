@@ -362,6 +362,11 @@ void writeStatsJson(const RenderStats& s, const std::filesystem::path& file) {
 }
 
 void writeStatsJson(const RenderStats& s, AtomicOutputFile& out) {
+    const std::string text = formatStatsJson(s);
+    out.stream().write(text.data(), std::streamsize(text.size()));
+}
+
+std::string formatStatsJson(const RenderStats& s) {
     nlohmann::json j;
     j["renderer"] = s.renderer;
     j["wall_seconds"] = s.wallSeconds;
@@ -392,8 +397,7 @@ void writeStatsJson(const RenderStats& s, AtomicOutputFile& out) {
         j["approximations"] = s.approximations;
     }
     if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;
-    const std::string text = j.dump(2) + "\n";
-    out.stream().write(text.data(), std::streamsize(text.size()));
+    return j.dump(2) + "\n";
 }
 
 }  // namespace vtex::render

@@ -15,8 +15,13 @@
 /// report.html at the top.
 #pragma once
 
+#include <vtex/core/enum_names.h>
 #include <vtex/core/progress.h>
+#include <vtex/octree/filtering.h>
 #include <vtex/pipelines/run_observer.h>
+#include <vtex/render/reference.h>
+#include <vtex/render/renderer.h>
+#include <vtex/sampler/sampler.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -26,10 +31,6 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-namespace vtex::render {
-struct Scene;
-}
 
 namespace vtex::pipelines {
 
@@ -53,10 +54,23 @@ struct TexelStep {
     /// texel is sampled only as finely as some render can use.
     std::uint32_t resolution = 64;
     std::optional<bool> cyclic;         ///< default: whether the source pattern is cyclic
-    std::string solid = "auto";         ///< auto | on | off
-    std::string filter = "sggx";        ///< neyret | sggx
+    sampler::SolidMode solid = sampler::SolidMode::Auto;   ///< `solid`: auto | on | off
+    octree::FilterRule filter = octree::FilterRule::Sggx;  ///< `filter`: neyret | sggx
     double tolerance = 0;
 };
+
+/// Which program a render stage is.
+enum class Renderer {
+    Texel,     ///< `vtex render`: the texels' volumes
+    Reference  ///< `vtex reference`: the texels' source meshes instead (lod_bias and shading do not apply)
+};
+inline constexpr EnumNames<Renderer, 2> kRendererNames{{{{Renderer::Texel, "texel"}, {Renderer::Reference, "reference"}}}};
+
+/// A texel render's approximations: the default budget, or every one off
+/// (render::ApproximationBudget::exact()).
+enum class Approximations { Default, Exact };
+inline constexpr EnumNames<Approximations, 2> kApproximationsNames{
+    {{{Approximations::Default, "default"}, {Approximations::Exact, "exact"}}}};
 
 struct RenderStep {
     std::string name;
@@ -66,18 +80,15 @@ struct RenderStep {
     int width = 0, height = 0;          ///< 0: the scene's camera
     int spp = 1;
     double lodBias = 0;
-    std::string shading = "fast";       ///< fast | reference
+    render::ShadingMode shading = render::ShadingMode::Fast;
     /// The texel renderer's mesh/volume hybrid (render::RenderOptions::hybrid) for texels with
     /// a source: the pipeline binds each built texel's source mesh.
     bool hybrid = true;
     /// Each level's densities fitted to the source across the shell (render::RenderOptions::fitLevels).
     bool levelFit = true;
-    /// "default" or "exact" (render::ApproximationBudget::exact(): every approximation off).
-    std::string approximations = "default";
-    /// texel (`vtex render`) | reference (`vtex reference`: the texels' source meshes instead of
-    /// their volumes; lod_bias and shading do not apply)
-    std::string renderer = "texel";
-    std::string mode = "embedded";      ///< reference renders: embedded | deformed
+    Approximations approximations = Approximations::Default;
+    Renderer renderer = Renderer::Texel;
+    render::ReferenceMode mode = render::ReferenceMode::Embedded;  ///< reference renders: embedded | deformed
     /// Above 1: the render is split into this many tile stages of image rows (kind "tile", named
     /// "<render>.<k>", tile k the rows [k·H/N, (k+1)·H/N) of the H rows), each rendering its rows
     /// alone (render::ImageOptions::rowBegin) into tiles/<render>.<k>.exr and .stats.json, and the

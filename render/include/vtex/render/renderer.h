@@ -194,5 +194,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
 void writeStatsJson(const RenderStats& stats, const std::filesystem::path& file);
 /// The same into an output the caller commits (AtomicOutputFile, commitAll).
 void writeStatsJson(const RenderStats& stats, AtomicOutputFile& out);
+/// The text writeStatsJson writes.
+std::string formatStatsJson(const RenderStats& stats);
 
 }  // namespace vtex::render
