@@ -189,10 +189,12 @@ void createFolder(const fs::path& folder) {
     if (error) throw IoError(folder, "cannot create the output directory: " + error.message());
 }
 
-// With the folder's lock held: the stages' folders, cleared of a killed run's temporaries when
+}  // namespace
+
+// (stage_graph.h) With the folder's lock held: the stages' folders, cleared of a killed run's temporaries when
 // the lock is this run's alone (`removeTemporaries`; a stage run alone shares it with the other
 // stages of its submission, whose temporaries are theirs).
-void prepareFolders(const fs::path& root, bool removeTemporaries) {
+void detail::prepareFolders(const fs::path& root, bool removeTemporaries) {
     for (const char* folder : {"", "sources", "samples", "builds", "tiles", "renders", "compares"}) {
         createFolder(root / folder);
         if (!removeTemporaries) continue;
@@ -205,8 +207,6 @@ void prepareFolders(const fs::path& root, bool removeTemporaries) {
         }
     }
 }
-
-}  // namespace
 
 std::string statusName(StageRecord::Status status) {
     switch (status) {
@@ -362,7 +362,7 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
             throw IoError(root, "jobs of a Slurm submission to it are still queued or running (" + ids +
                                     "): wait for them (vtex run --status " + root.string() + "), or scancel them");
         }
-    prepareFolders(root, alone == stages.size());
+    detail::prepareFolders(root, alone == stages.size());
     MemoryMonitor memory;
     if (alone < stages.size()) {
         const Stage& stage = stages[alone];

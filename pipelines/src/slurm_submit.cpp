@@ -131,6 +131,9 @@ Submission submitPipeline(const Pipeline& pipeline, const RunOptions& options, c
     // Exclusive while submitting: no local run meanwhile, and a job that starts waits (--wait).
     const FolderLock lock(root, options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse);
     refuseLiveSubmission(root);
+    // No job of the last submission lives and no run holds the folder: what a job killed
+    // mid-write (scancel, a lost node) left half-written can go.
+    detail::prepareFolders(root, true);
 
     Submission submission{root, detail::jobsFile(root), detail::planStages(stages, root, options.force), {}};
     detail::JobsRecord record{fs::absolute(pipeline.file), root, utcNow(), {}};

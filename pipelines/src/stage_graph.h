@@ -63,6 +63,12 @@ std::filesystem::path manifestPath(const Stage& stage, const std::filesystem::pa
 void buildStageGraph(const Pipeline& pipeline, const std::filesystem::path& root, bool force, MemoryBudget& budget,
                      std::vector<Stage>& stages, std::vector<Omission>& leftOut);
 
+/// With the output folder's lock held: creates the stages' folders and, when the lock is the
+/// caller's alone (`removeTemporaries`: a whole run, a Slurm submission with no job of the last
+/// one alive), removes the temporaries that writers killed mid-write left there. Throws
+/// vtex::IoError when a folder cannot be created.
+void prepareFolders(const std::filesystem::path& root, bool removeTemporaries);
+
 /// The plan of a graph nothing has run in yet (planPipeline, and what a Slurm submission
 /// submits): wave by wave, a stage whose inputs are all up to date is judged by its manifest, one
 /// with an input that runs first runs too. Leaves the stages as it found them.

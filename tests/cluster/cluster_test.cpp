@@ -166,10 +166,15 @@ TEST(Cluster, ASubmissionMakesTheBytesOfALocalRunAndIsNotRepeated) {
         }
     expectSameOutputs(local, slurm);
 
-    // Everything is cached now: nothing is submitted again, and the status says so.
+    // Everything is cached now: nothing is submitted again, and the status says so. What a job
+    // killed mid-write left (AtomicOutputFile's temporary) goes: no job lives, the submitter
+    // holds the folder.
+    const fs::path leftover = slurm / "renders" / ".cross-hill.exr.tmp.gone-host.999999.1.1";
+    vtex::test::writeText(leftover, "half an image");
     const auto again = runVtex({"run", pipeline.string(), "-o", slurm.string(), "--executor", "slurm"});
     ASSERT_EQ(again.exitStatus, 0) << again.err;
     EXPECT_NE(again.err.find("0 of 14 stages submitted"), std::string::npos) << again.err;
+    EXPECT_FALSE(fs::exists(leftover));
     for (const auto& [stage, s] : stageStatus(slurm)) EXPECT_EQ(s.state, "cached") << stage;
 }
 
