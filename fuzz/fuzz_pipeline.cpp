@@ -177,6 +177,12 @@ bool contains(const std::vector<std::string>& names, const std::string& n) {
 
 // A path holding a NUL names a file no system call can open: the OS would read the path up to
 // the NUL, another file than the one written.
+// The value is one its table names (a parsed enum can hold no other).
+template <class Enum, std::size_t N>
+bool named(Enum value, const vtex::EnumNames<Enum, N>& names) {
+    return names.parse(names.name(value)) == value;
+}
+
 void checkPath(const fs::path& path, const std::string& what) {
     check(path.string().find('\0') == std::string::npos, what + " holding a NUL accepted: " + path.string());
 }
@@ -204,8 +210,8 @@ void checkAccepted(const Pipeline& p, const fs::path& file) {
         check(contains(sources, t.source), "texel of an unknown source accepted");
         check(t.resolution >= 1 && t.resolution <= 4096 && (t.resolution & (t.resolution - 1)) == 0,
               "resolution not a power of two in [1, 4096]");
-        check(t.solid == "auto" || t.solid == "on" || t.solid == "off", "solid");
-        check(t.filter == "neyret" || t.filter == "sggx", "filter");
+        check(named(t.solid, vtex::sampler::kSolidModeNames), "solid");
+        check(named(t.filter, vtex::octree::kFilterRuleNames), "filter");
         check(std::isfinite(t.tolerance) && t.tolerance >= 0 && t.tolerance <= 1e6, "tolerance out of range");
     }
     for (const RenderStep& r : p.renders) {
@@ -222,14 +228,17 @@ void checkAccepted(const Pipeline& p, const fs::path& file) {
         check(r.width >= 0 && r.width <= 16384 && r.height >= 0 && r.height <= 16384, "image size out of range");
         check(r.spp >= 1 && r.spp <= 65536, "spp out of range");
         check(std::isfinite(r.lodBias) && std::abs(r.lodBias) <= 16, "lod_bias out of range");
-        check(r.renderer == "texel" || r.renderer == "reference", "renderer");
-        check(r.mode == "embedded" || r.mode == "deformed", "mode");
-        check(r.shading == "fast" || r.shading == "reference", "shading");
-        check(r.approximations == "default" || r.approximations == "exact", "approximations");
+        check(named(r.renderer, vtex::pipelines::kRendererNames), "renderer");
+        check(named(r.mode, vtex::render::kReferenceModeNames), "mode");
+        check(named(r.shading, vtex::render::kShadingModeNames), "shading");
+        check(named(r.approximations, vtex::pipelines::kApproximationsNames), "approximations");
+        check(r.tiles >= 1 && r.tiles <= RenderStep::kMaxTiles, "tiles out of range");
     }
     for (const CompareStep& c : p.compares)
         check(contains(renders, c.a) && contains(renders, c.b), "compare of an unknown render accepted");
     for (const std::string& w : p.warnings) check(w.find('\n') == std::string::npos, "warning of several lines");
+    check(p.slurm.cpus >= 1 && p.slurm.cpus <= 4096, "slurm.cpus out of range");
+    for (const std::string& a : p.slurm.sbatchArguments) check(!a.empty() && a.find('\n') == std::string::npos, "sbatch argument");
 }
 
 void checkFolderUnchanged() {
