@@ -14,6 +14,7 @@
 #include "content_hash.h"
 #include "memory_monitor.h"
 #include "report.h"
+#include "slurm_jobs.h"
 #include "stage_graph.h"
 
 #include <nlohmann/json.hpp>
@@ -181,22 +182,23 @@ private:
     std::atomic<std::uint64_t> mDone{0};
 };
 
-// The output folders, once the pipeline is accepted whole: a refused one (exit 3) left an empty
-// output directory tree behind (found by fuzz_cli.py).
-void createFolder(const fs::path& folder) {
-    std::error_code error;
-    fs::create_directories(folder, error);
-    if (error) throw IoError(folder, "cannot create the output directory: " + error.message());
-}
 
 }  // namespace
 
 // (stage_graph.h) With the folder's lock held: the stages' folders, cleared of a killed run's temporaries when
 // the lock is this run's alone (`removeTemporaries`; a stage run alone shares it with the other
 // stages of its submission, whose temporaries are theirs).
+// (stage_graph.h) Called once the pipeline is accepted whole: a refused one (exit 3) left an
+// empty output directory tree behind (found by fuzz_cli.py).
+void detail::createFolder(const fs::path& folder) {
+    std::error_code error;
+    fs::create_directories(folder, error);
+    if (error) throw IoError(folder, "cannot create the output directory: " + error.message());
+}
+
 void detail::prepareFolders(const fs::path& root, bool removeTemporaries) {
     for (const char* folder : {"", "sources", "samples", "builds", "tiles", "renders", "compares"}) {
-        createFolder(root / folder);
+        detail::createFolder(root / folder);
         if (!removeTemporaries) continue;
         // A killed run leaves the hidden temporaries of AtomicOutputFile behind; holding the
         // folder's lock, this run knows no other run writes them, so they can go.
@@ -349,19 +351,13 @@ RunReport runPipeline(const Pipeline& pipeline, const RunOptions& options) {
     detail::buildStageGraph(pipeline, root, options.force, budget, stages, report.leftOut);
     const std::size_t alone = options.stage.empty() ? stages.size() : findStage(stages, options.stage);
 
-    createFolder(root);
+    detail::createFolder(root);
     // One run per output folder (folder_lock.h), held until this run returns; a stage alone
     // shares it with the other stages of a cluster submission and holds its own stage's.
     const FolderLock::Mode mode = options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse;
     const FolderLock lock(root, mode, alone < stages.size() ? FolderLock::Access::Shared : FolderLock::Access::Exclusive);
     // The jobs of a Slurm submission write this folder without holding its lock while they pend.
-    if (alone == stages.size())
-        if (const std::vector<std::string> live = liveSubmissionJobs(root); !live.empty()) {
-            std::string ids;
-            for (const std::string& id : live) ids += (ids.empty() ? "" : ", ") + id;
-            throw IoError(root, "jobs of a Slurm submission to it are still queued or running (" + ids +
-                                    "): wait for them (vtex run --status " + root.string() + "), or scancel them");
-        }
+    if (alone == stages.size()) detail::refuseWhileJobsLive(root, liveSubmissionJobs(root));
     detail::prepareFolders(root, alone == stages.size());
     MemoryMonitor memory;
     if (alone < stages.size()) {

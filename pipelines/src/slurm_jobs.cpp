@@ -82,26 +82,35 @@ bool isLive(const std::string& state) {
     return !ended.count(state);
 }
 
+std::vector<std::string> liveJobs(const JobsRecord& record) {
+    std::vector<std::string> ids, live;
+    for (const SubmittedJob& j : record.jobs) ids.push_back(j.job);
+    const auto states = queryJobs(ids);
+    for (const std::string& id : ids)
+        if (const auto known = states.find(id); known != states.end() && isLive(known->second.state)) live.push_back(id);
+    return live;
+}
+
+void refuseWhileJobsLive(const fs::path& output, const std::vector<std::string>& live) {
+    if (live.empty()) return;
+    std::string ids;
+    for (const std::string& id : live) ids += (ids.empty() ? "" : ", ") + id;
+    throw IoError(output, "jobs of a Slurm submission to it are still queued or running (" + ids +
+                              "): wait for them (vtex run --status " + output.string() + "), or scancel them");
+}
+
 }  // namespace vtex::pipelines::detail
 
 namespace vtex::pipelines {
 
 std::vector<std::string> liveSubmissionJobs(const std::filesystem::path& output) {
-    std::vector<std::string> ids, live;
-    std::map<std::string, detail::JobState> states;
     try {
         const auto record = detail::readJobsRecord(output);
-        if (!record) return {};
-        for (const SubmittedJob& j : record->jobs) ids.push_back(j.job);
-        states = detail::queryJobs(ids);
+        return record ? detail::liveJobs(*record) : std::vector<std::string>{};
     } catch (const std::exception&) {
         // No Slurm to ask here (or no readable record): nothing known to run for this folder.
         return {};
     }
-    for (const std::string& id : ids)  // in the order they were submitted
-        if (const auto known = states.find(id); known != states.end() && detail::isLive(known->second.state))
-            live.push_back(id);
-    return live;
 }
 
 }  // namespace vtex::pipelines

@@ -40,4 +40,12 @@ std::map<std::string, JobState> queryJobs(const std::vector<std::string>& jobs);
 /// A state in which the job may still run (PENDING, RUNNING, SUSPENDED, COMPLETING…).
 bool isLive(const std::string& state);
 
+/// The record's jobs that Slurm says may still run, in the order they were submitted. Throws as
+/// queryJobs does.
+std::vector<std::string> liveJobs(const JobsRecord& record);
+
+/// Throws vtex::IoError when `live` is not empty: jobs of a submission to `output` may still
+/// write it, so neither a local run nor another submission may.
+void refuseWhileJobsLive(const std::filesystem::path& output, const std::vector<std::string>& live);
+
 }  // namespace vtex::pipelines::detail

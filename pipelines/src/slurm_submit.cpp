@@ -54,9 +54,8 @@ std::string jobScript(const std::vector<std::string>& command, const std::string
            ", submitted by `vtex run --executor slurm` at " + utcNow() + "\nexec " + detail::commandLine(command) + "\n";
 }
 
-std::vector<std::string> sbatchCommand(const std::vector<Stage>& stages, const Stage& stage, const SlurmSettings& s,
+std::vector<std::string> sbatchCommand(const Stage& stage, const Resources& resources, const SlurmSettings& s,
                                        const std::vector<std::string>& after, const fs::path& log, const fs::path& script) {
-    const Resources resources = resourcesOf(stages, stage, s);
     std::vector<std::string> argv = {"sbatch", "--parsable", "--job-name=vtex:" + stageId(stage.kind, stage.name),
                                      "--output=" + log.string()};
     if (!s.partition.empty()) argv.push_back("--partition=" + s.partition);
@@ -90,32 +89,14 @@ std::string submit(const std::vector<std::string>& argv, const std::string& id) 
     return job;
 }
 
-void cancel(const std::vector<SubmittedJob>& jobs) {
+// Best effort, on the way out of a failed submission: its own error is the one to report.
+void cancel(const std::vector<SubmittedJob>& jobs) noexcept {
     std::vector<std::string> argv = {"scancel"};
     for (const SubmittedJob& j : jobs) argv.push_back(j.job);
-    if (argv.size() > 1) detail::runProcess(argv, 60);
-}
-
-// Refuses while the previous submission's jobs may still run: they write this folder.
-void refuseLiveSubmission(const fs::path& root) {
-    const auto record = detail::readJobsRecord(root);
-    if (!record) return;
-    std::vector<std::string> ids;
-    for (const SubmittedJob& j : record->jobs) ids.push_back(j.job);
-    std::string live;
-    const auto states = detail::queryJobs(ids);
-    for (const std::string& id : ids)  // in the order they were submitted
-        if (const auto known = states.find(id); known != states.end() && detail::isLive(known->second.state))
-            live += (live.empty() ? "" : ", ") + id;
-    if (!live.empty())
-        throw IoError(root, "jobs of the submission of " + record->submittedAt + " are still queued or running (" + live +
-                                "): wait for them (vtex run --status " + root.string() + "), or scancel them");
-}
-
-void createFolder(const fs::path& folder) {
-    std::error_code error;
-    fs::create_directories(folder, error);
-    if (error) throw IoError(folder, "cannot create the folder: " + error.message());
+    try {
+        if (argv.size() > 1) detail::runProcess(argv, 60);
+    } catch (...) {
+    }
 }
 
 }  // namespace
@@ -127,10 +108,11 @@ Submission submitPipeline(const Pipeline& pipeline, const RunOptions& options, c
     std::vector<Stage> stages;
     std::vector<Omission> leftOut;
     detail::buildStageGraph(pipeline, root, options.force, budget, stages, leftOut);
-    createFolder(detail::slurmFolder(root) / "logs");
+    detail::createFolder(detail::slurmFolder(root) / "logs");
     // Exclusive while submitting: no local run meanwhile, and a job that starts waits (--wait).
     const FolderLock lock(root, options.waitForLock ? FolderLock::Mode::Wait : FolderLock::Mode::Refuse);
-    refuseLiveSubmission(root);
+    // The last submission's jobs may still write the folder (asked of Slurm, which must answer).
+    if (const auto last = detail::readJobsRecord(root)) detail::refuseWhileJobsLive(root, detail::liveJobs(*last));
     // No job of the last submission lives and no run holds the folder: what a job killed
     // mid-write (scancel, a lost node) left half-written can go.
     detail::prepareFolders(root, true);
@@ -139,6 +121,9 @@ Submission submitPipeline(const Pipeline& pipeline, const RunOptions& options, c
     detail::JobsRecord record{fs::absolute(pipeline.file), root, utcNow(), {}};
     std::map<std::size_t, std::string> jobOf;  // stage index → its job
     try {
+        // Written first, then after every job: a submitter killed half-way leaves a record of
+        // what it submitted, and a submission of nothing one that says so.
+        detail::writeJobsRecord(record);
         for (std::size_t i = 0; i < stages.size(); ++i) {
             if (!submission.plan[i].runs) continue;
             const Stage& stage = stages[i];
@@ -154,14 +139,12 @@ Submission submitPipeline(const Pipeline& pipeline, const RunOptions& options, c
             writeFileAtomically(job.script, jobScript(command, id, pipeline));
             fs::permissions(job.script, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add);
             const fs::path logPattern = detail::slurmFolder(root) / "logs" / (stage.kind + "." + stage.name + ".%j.log");
-            job.job = submit(sbatchCommand(stages, stage, slurm.settings, job.after, logPattern, job.script), id);
+            job.job = submit(sbatchCommand(stage, resources, slurm.settings, job.after, logPattern, job.script), id);
             job.log = detail::slurmFolder(root) / "logs" / (stage.kind + "." + stage.name + "." + job.job + ".log");
             jobOf[i] = job.job;
             record.jobs.push_back(job);
-            // After every job: a submitter killed half-way leaves a record of what it submitted.
             detail::writeJobsRecord(record);
         }
-        detail::writeJobsRecord(record);
     } catch (...) {
         cancel(record.jobs);  // whole or absent: the record then names cancelled jobs only
         throw;

@@ -63,6 +63,9 @@ std::filesystem::path manifestPath(const Stage& stage, const std::filesystem::pa
 void buildStageGraph(const Pipeline& pipeline, const std::filesystem::path& root, bool force, MemoryBudget& budget,
                      std::vector<Stage>& stages, std::vector<Omission>& leftOut);
 
+/// Creates `folder` and its parents. Throws vtex::IoError naming it.
+void createFolder(const std::filesystem::path& folder);
+
 /// With the output folder's lock held: creates the stages' folders and, when the lock is the
 /// caller's alone (`removeTemporaries`: a whole run, a Slurm submission with no job of the last
 /// one alive), removes the temporaries that writers killed mid-write left there. Throws
