@@ -15,6 +15,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 namespace vtex::pipelines::detail {
 namespace {
@@ -56,11 +57,23 @@ void writeOutputs(const Stage& self, const render::Image& image, const std::stri
 
 }  // namespace
 
-render::RenderOptions renderOptions(const RenderStep& step) {
-    render::RenderOptions o;
+namespace {
+
+// What both renderers take from a step: the image and its sampling, and the rows a tile makes.
+render::ImageOptions imageOptions(const RenderStep& step, std::pair<int, int> rows) {
+    render::ImageOptions o;
     o.width = step.width;
     o.height = step.height;
     o.spp = step.spp;
+    std::tie(o.rowBegin, o.rowEnd) = rows;
+    return o;
+}
+
+}  // namespace
+
+render::RenderOptions renderOptions(const RenderStep& step, std::pair<int, int> rows) {
+    render::RenderOptions o;
+    static_cast<render::ImageOptions&>(o) = imageOptions(step, rows);
     o.lodBias = step.lodBias;
     o.hybrid = step.hybrid;
     o.fitLevels = step.levelFit;
@@ -69,11 +82,9 @@ render::RenderOptions renderOptions(const RenderStep& step) {
     return o;
 }
 
-render::ReferenceOptions referenceOptions(const RenderStep& step) {
+render::ReferenceOptions referenceOptions(const RenderStep& step, std::pair<int, int> rows) {
     render::ReferenceOptions o;
-    o.width = step.width;
-    o.height = step.height;
-    o.spp = step.spp;
+    static_cast<render::ImageOptions&>(o) = imageOptions(step, rows);
     o.mode = step.mode;
     return o;
 }
@@ -121,10 +132,8 @@ Json RenderWork::run(const std::vector<Stage>& stages, const Stage& self) const 
     const render::Scene scene = boundScene(stages, self);
     const std::pair<int, int> rows = mTile >= 0 ? tileRows(mSpec.height(), step.tiles, mTile) : std::pair{0, 0};
     const bool reference = step.renderer == Renderer::Reference;
-    render::ReferenceOptions referenceSettings = referenceOptions(step);
-    render::RenderOptions renderSettings = renderOptions(step);
-    std::tie(referenceSettings.rowBegin, referenceSettings.rowEnd) = rows;
-    std::tie(renderSettings.rowBegin, renderSettings.rowEnd) = rows;
+    const render::ReferenceOptions referenceSettings = referenceOptions(step, rows);
+    const render::RenderOptions renderSettings = renderOptions(step, rows);
     std::string what = "rendering " + std::to_string(mSpec.width()) + "x" + std::to_string(mSpec.height());
     if (rows.second > 0) what += " rows " + std::to_string(rows.first) + " to " + std::to_string(rows.second);
     const auto held = mBudget.reserve(step.scene, what,

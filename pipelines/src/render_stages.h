@@ -17,9 +17,10 @@
 
 namespace vtex::pipelines::detail {
 
-/// The renderers' options a render step asks for.
-render::RenderOptions renderOptions(const RenderStep& step);
-render::ReferenceOptions referenceOptions(const RenderStep& step);
+/// The renderers' options a render step asks for, for the rows [rows.first, rows.second) of the
+/// image (0/0: every row; ImageOptions::rowBegin).
+render::RenderOptions renderOptions(const RenderStep& step, std::pair<int, int> rows = {0, 0});
+render::ReferenceOptions referenceOptions(const RenderStep& step, std::pair<int, int> rows = {0, 0});
 
 /// What a render and its tiles share: the step, its scene as loaded once when the graph was
 /// built, the texels it binds that the pipeline builds (scene texel, pipeline texel), and the
