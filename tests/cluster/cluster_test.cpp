@@ -25,26 +25,7 @@ namespace {
 // render, a reference and a comparison of the tiled render against the reference.
 fs::path makeClusterProject(const std::string& name) {
     const fs::path dir = vtex::test::makeProject(name);
-    vtex::test::writeText(dir / "pipeline.toml", R"(
-[[source]]
-name = "grass"
-pattern = "grass"
-count = 8
-
-[[source]]
-name = "cross"
-file = "cross.obj"
-
-[[texel]]
-name = "grass"
-source = "grass"
-resolution = 16
-
-[[texel]]
-name = "cross"
-source = "cross"
-resolution = 8
-
+    vtex::test::writeText(dir / "pipeline.toml", vtex::test::kGrassTexel + vtex::test::kCrossTexel + R"(
 [[render]]
 name = "grass-tiled"
 scene = "hill.toml"

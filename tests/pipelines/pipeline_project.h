@@ -12,6 +12,31 @@ namespace fs = std::filesystem;
 
 inline void writeText(const fs::path& file, const std::string& text) { std::ofstream(file, std::ios::binary) << text; }
 
+// The project's two texels as pipeline text, for the tests that write pipelines of their own
+// renders: `grass` from the pattern, `cross` from cross.obj.
+inline const std::string kGrassTexel = R"(
+[[source]]
+name = "grass"
+pattern = "grass"
+count = 8
+
+[[texel]]
+name = "grass"
+source = "grass"
+resolution = 16
+)";
+inline const std::string kCrossTexel = R"(
+[[source]]
+name = "cross"
+file = "cross.obj"
+
+[[texel]]
+name = "cross"
+source = "cross"
+resolution = 8
+filter = "neyret"
+)";
+
 // A project folder: a 4×4 quad hill, a scene over it, a tiny OBJ source, and a pipeline with
 // two sources, two texels, two renders and a comparison.
 inline fs::path makeProject(const std::string& name) {
@@ -56,30 +81,8 @@ height = 0.25
     writeText(dir / "cross.obj", "v 0.1 0.5 0.1\nv 0.9 0.5 0.1\nv 0.9 0.5 0.9\nv 0.1 0.5 0.9\n"
                                  "v 0.5 0.1 0.1\nv 0.5 0.9 0.1\nv 0.5 0.9 0.9\nv 0.5 0.1 0.9\n"
                                  "f 1 2 3 4\nf 5 6 7 8\n");
-    writeText(dir / "pipeline.toml", R"(
-[pipeline]
-output = "out"
-
-[[source]]
-name = "grass"
-pattern = "grass"
-count = 8
-
-[[source]]
-name = "cross"
-file = "cross.obj"
-
-[[texel]]
-name = "grass"
-source = "grass"
-resolution = 16
-
-[[texel]]
-name = "cross"
-source = "cross"
-resolution = 8
-filter = "neyret"
-
+    // (a first empty line, as ever: AFileWithAnErrorIsRefusedBeforeAnythingRuns names "line 2")
+    writeText(dir / "pipeline.toml", "\n[pipeline]\noutput = \"out\"\n" + kGrassTexel + kCrossTexel + R"(
 [[render]]
 name = "grass-hill"
 scene = "hill.toml"

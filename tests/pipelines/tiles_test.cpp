@@ -28,20 +28,7 @@ namespace {
 // reference renderer whole and in 5 tiles (rows 0, 7, 14, 21, 28, 36: none a multiple of 16).
 fs::path makeTiledProject(const std::string& name) {
     const fs::path dir = vtex::test::makeProject(name);
-    vtex::test::writeText(dir / "pipeline.toml", R"(
-[pipeline]
-output = "out"
-
-[[source]]
-name = "grass"
-pattern = "grass"
-count = 8
-
-[[texel]]
-name = "grass"
-source = "grass"
-resolution = 16
-
+    vtex::test::writeText(dir / "pipeline.toml", "[pipeline]\noutput = \"out\"\n" + vtex::test::kGrassTexel + R"(
 [[render]]
 name = "whole"
 scene = "hill.toml"
