@@ -152,9 +152,10 @@ inline std::vector<std::pair<std::string, std::function<Scene()>>> extremeScenes
              return s;
          }},
         {"twisted patch", [=] {
+             // Opposite edges 80° apart: (1, 0, ±tan 40°).
              Scene s = baseScene(Eigen::Vector3d(0.5, -2, 1.5), Eigen::Vector3d(0.5, 0.5, 0), 40, size);
-             auto m = quadMesh({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0.8f), Eigen::Vector3f(1, 1, 0),
-                                Eigen::Vector3f(0, 1, 0.8f)},
+             auto m = quadMesh({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0.8391f), Eigen::Vector3f(1, 1, 0),
+                                Eigen::Vector3f(0, 1, 0.8391f)},
                                {Eigen::Vector3f(0.7f, 0, 0.7f), Eigen::Vector3f(0, 0.7f, 0.7f),
                                 Eigen::Vector3f(-0.7f, 0, 0.7f), Eigen::Vector3f(0, -0.7f, 0.7f)});
              texelFace(s, m, 0.6);
