@@ -141,5 +141,37 @@ TEST(ExtremeRatios, DiffuseReflectanceOfBothMethodsMatchesQuadrature) {
     RecordProperty("worst_reference", std::to_string(worstReference));
 }
 
+// The specular factor ∫(N·v)⁺(N·l)⁺ (n+2)/(2π) cosⁿα f dN / A(v) (α between l and v mirrored
+// about N) likewise, for shininess 1, 10 and 100, as an error relative to (n+2)/(2π) (a facet
+// mirroring v onto l). Measured worst over 20 pairs per shape and shininess: the paper's method
+// 0.0057, the fast path 0.060 (at shininess 100: its 16 visible normals miss part of a narrow
+// lobe; issue 15's first part is its error on ordinary shapes). Bounds 0.012 and 0.08.
+TEST(ExtremeRatios, SpecularReflectanceOfBothMethodsMatchesQuadrature) {
+    std::mt19937 rng(16);
+    for (const double n : {1.0, 10.0, 100.0}) {
+        const double peak = (n + 2) / (2 * kPi);
+        double worstFast = 0, worstReference = 0;
+        for (const auto& [name, e] : extremeShapes(rng))
+            for (int k = 0; k < 20; ++k) {
+                const Vec3 v = randomDirection(rng), l = randomDirection(rng);
+                const double specular =
+                    integrateOverSurface(e, [&](const Vec3& normal) {
+                        const double nv = normal.dot(v), nl = normal.dot(l);
+                        if (nv <= 0 || nl <= 0) return 0.0;
+                        const Vec3 mirrored = 2 * nv * normal - v;
+                        return nv * nl * peak * std::pow(std::max(0.0, mirrored.dot(l)), n);
+                    }, 300) / e.projectedArea(v);
+                const double fast = reflectanceFast(e.sggx(), l, v, n).specular;
+                const double reference = reflectanceReference(e.sggx(), l, v, n).specular;
+                ASSERT_TRUE(std::isfinite(fast) && std::isfinite(reference)) << name;
+                EXPECT_LE(std::abs(fast - specular) / peak, 0.08) << name << " n=" << n;
+                EXPECT_LE(std::abs(reference - specular) / peak, 0.012) << name << " n=" << n;
+                worstFast = std::max(worstFast, std::abs(fast - specular) / peak);
+                worstReference = std::max(worstReference, std::abs(reference - specular) / peak);
+            }
+        std::cout << "specular, shininess " << n << ", worst: fast " << worstFast << ", reference " << worstReference << "\n";
+    }
+}
+
 }  // namespace
 }  // namespace vtex::primitive
