@@ -137,7 +137,7 @@ void makeScratch() {
     writeText(gDir / "tiny.glb", std::string_view(kTinyGlb, sizeof kTinyGlb - 1));
     for (const char* scene : {"hill.toml", "scene.toml", "fig7-grass-hill.toml", "fig6-bush-field.toml",
                               "fig10-fur-torus.toml", "fig9-forest-hill.toml", "fig11-blocks.toml", "fig1-brushed.toml",
-                              "study-forest.toml", "fig4-bush.toml"})
+                              "fig8-velvet.toml", "study-forest.toml", "fig4-bush.toml"})
         writeText(gDir / scene, kScene);
     if (::mkfifo((gDir / "fifo.toml").c_str(), 0600) != 0 || ::mkfifo((gDir / "fifo.obj").c_str(), 0600) != 0)
         broken("mkfifo");

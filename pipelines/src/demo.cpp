@@ -61,24 +61,41 @@ std::string vector(const Point& p) {
     return text;
 }
 
-// One surface covered with one texel, under a low sun. The pipeline binds the texel to the one it
-// builds; the scene names that build's files (DIR/builds, DIR/sources, relative to DIR/inputs)
-// as well, so that after the demo `vtex render DIR/inputs/SCENE.toml` renders it on its own.
+std::string coverName(std::size_t i) { return i == 0 ? "cover" : "cover" + std::to_string(i + 1); }
+
+// A surface covered with a texel: its base mesh, shell height, repeat and ground colour, and the
+// demo's texel build it carries.
+struct Cover {
+    std::string mesh;
+    double shellHeight;
+    std::array<double, 2> repeat;
+    Point ground;
+    std::string texel;
+};
+
+// Surfaces covered with texels, under a low sun (travelling along `light`). The pipeline binds
+// each scene texel (`cover`, then `cover2`, …) to the build it names; the scene names that
+// build's files (DIR/builds, DIR/sources, relative to DIR/inputs) as well, so that after the
+// demo `vtex render DIR/inputs/SCENE.toml` renders it on its own. One cover writes the text it
+// always has (its renders stay cached).
 void writeScene(const fs::path& file, const std::string& title, const Shot& shot, int width, int height,
-                const std::string& mesh, double shellHeight, std::array<double, 2> repeat, const Point& ground,
-                const std::string& texel) {
+                const std::vector<Cover>& covers, const Point& light = {-0.6, 0.5, -0.8}) {
     std::ostringstream toml;
     toml << "# vtex demo: " << title << "\n"
          << "[camera]\nposition = " << vector(shot.eye) << "\nlook_at = " << vector(shot.target)
          << "\nup = [0.0, 0.0, 1.0]\nfov_y = " << shot.fov << "\nwidth = " << width << "\nheight = " << height
-         << "\n\n[[light]]\ntype = \"directional\"\ndirection = [-0.6, 0.5, -0.8]\ncolor = [2.8, 2.7, 2.5]\n\n"
-         << "[[texel]]\nname = \"cover\"\nvolume = \"../builds/" << texel << ".vto\"\nsource = \"../sources/" << texel
-         << ".glb\"\ntau = 1.0\n"
-         << "material = { diffuse = [1.0, 1.0, 1.0], specular = [0.04, 0.04, 0.04], shininess = 20.0, "
-            "ambient = [0.04, 0.045, 0.05] }\n\n"
-         << "[[surface]]\nmesh = \"" << mesh << "\"\ntexel = \"cover\"\nheight = " << shellHeight
-         << "\nplacement = \"on\"\nrepeat = [" << repeat[0] << ", " << repeat[1] << "]\n"
-         << "material = { diffuse = " << vector(ground) << ", ambient = [0.02, 0.02, 0.02] }\n";
+         << "\n\n[[light]]\ntype = \"directional\"\ndirection = [" << light[0] << ", " << light[1] << ", " << light[2]
+         << "]\ncolor = [2.8, 2.7, 2.5]\n";
+    for (std::size_t i = 0; i < covers.size(); ++i)
+        toml << "\n[[texel]]\nname = \"" << coverName(i) << "\"\nvolume = \"../builds/" << covers[i].texel
+             << ".vto\"\nsource = \"../sources/" << covers[i].texel << ".glb\"\ntau = 1.0\n"
+             << "material = { diffuse = [1.0, 1.0, 1.0], specular = [0.04, 0.04, 0.04], shininess = 20.0, "
+                "ambient = [0.04, 0.045, 0.05] }\n";
+    for (std::size_t i = 0; i < covers.size(); ++i)
+        toml << "\n[[surface]]\nmesh = \"" << covers[i].mesh << "\"\ntexel = \"" << coverName(i)
+             << "\"\nheight = " << covers[i].shellHeight << "\nplacement = \"on\"\nrepeat = [" << covers[i].repeat[0]
+             << ", " << covers[i].repeat[1] << "]\n"
+             << "material = { diffuse = " << vector(covers[i].ground) << ", ambient = [0.02, 0.02, 0.02] }\n";
     writeFileAtomically(file, toml.str());
 }
 
@@ -115,25 +132,48 @@ RunReport runDemo(const DemoOptions& options) {
                  [](double u, double v) { return Point{9 * u - 4.5, 9 * v - 4.5, 0}; }, "Fig. 11, a plane");
     writeGridObj(inputs / "quad.obj", 1, 1, false, false,
                  [](double u, double v) { return Point{2 * u - 1, 2 * v - 1, 0}; }, "one face");
+    writeGridObj(inputs / "quad-left.obj", 1, 1, false, false,
+                 [](double u, double v) { return Point{2 * u - 2.05, 2 * v - 1, 0}; }, "Fig. 1, the left face");
+    writeGridObj(inputs / "quad-right.obj", 1, 1, false, false,
+                 [](double u, double v) { return Point{2 * u + 0.05, 2 * v - 1, 0}; }, "Fig. 1, the right face");
+    writeGridObj(inputs / "field-bushes.obj", 5, 100, false, false,
+                 [](double u, double v) { return Point{5 * u, 100 * v, 0}; }, "Fig. 6, the bushes' half");
+    writeGridObj(inputs / "field-spheres.obj", 5, 100, false, false,
+                 [](double u, double v) { return Point{5 + 5 * u, 100 * v, 0}; }, "Fig. 6, the spheres' half");
+    writeGridObj(inputs / "bump-256.obj", 16, 16, false, false, hill(3, 3, 1.2, 2.5), "Fig. 8, a bump");
+    // Fig. 6's other texel: a sphere, as a source file (a UV sphere; the poles' rings stop short
+    // of the poles, whose quads would collapse).
+    writeGridObj(inputs / "sphere.obj", 48, 24, true, false,
+                 [pi](double u, double v) {
+                     const double a = 2 * pi * u, b = pi * (0.02 + 0.96 * v);
+                     return Point{std::sin(b) * std::cos(a), std::sin(b) * std::sin(a), -std::cos(b)};
+                 },
+                 "a sphere");
 
     // Scenes, one per figure.
     writeScene(inputs / "fig7-grass-hill.toml", "Fig. 7, grass on a hill of 1404 faces", {{0, -19, 4.2}, {0, 0, 1.4}, 40},
-               width, height, "hill-1404.obj", 0.3, {2, 2}, soil, "grass");
-    writeScene(inputs / "fig6-bush-field.toml", "Fig. 6, bushes tiling a 50x500 region to the horizon",
-               {{5, -1.5, 0.9}, {5, 30, 0}, 50}, width, height, "field-50x500.obj", 0.2, {5, 5}, soil, "bush");
+               width, height, {{"hill-1404.obj", 0.3, {2, 2}, soil, "grass"}});
+    writeScene(inputs / "fig6-bush-field.toml", "Fig. 6, bushes and spheres tiling a 50x500 region to the horizon",
+               {{5, -1.5, 0.9}, {5, 30, 0}, 50}, width, height,
+               {{"field-bushes.obj", 0.2, {5, 5}, soil, "bush"}, {"field-spheres.obj", 0.2, {5, 5}, soil, "spheres"}});
     writeScene(inputs / "fig10-fur-torus.toml", "Fig. 10, fur on a torus of 240 faces", {{0, -6.2, 4.2}, {0, 0, 0}, 40},
-               width, height, "torus-240.obj", 0.15, {2, 1}, grey, "fur");
+               width, height, {{"torus-240.obj", 0.15, {2, 1}, grey, "fur"}});
     writeScene(inputs / "fig9-forest-hill.toml", "Fig. 9, a forest on a hill of 578 faces",
-               {{0, -25, 10}, {0, 0, 0.8}, 40}, width, height, "hill-578.obj", 0.7, {1, 1}, soil, "bush");
+               {{0, -25, 10}, {0, 0, 0.8}, 40}, width, height, {{"hill-578.obj", 0.7, {1, 1}, soil, "bush"}});
     writeScene(inputs / "fig11-blocks.toml", "Fig. 11, building elements on 81 faces", {{0, -9.5, 6.5}, {0, 0, 0}, 40},
-               width, height, "plane-81.obj", 1.0, {1, 1}, grey, "blocks");
-    writeScene(inputs / "fig1-brushed.toml", "Fig. 1, one texel of brushed aluminium", {{0, -2.6, 2.8}, {0, 0, 0.4}, 40},
-               height, height, "quad.obj", 1.0, {1, 1}, grey, "brushed");
+               width, height, {{"plane-81.obj", 1.0, {1, 1}, grey, "blocks"}});
+    writeScene(inputs / "fig1-brushed.toml",
+               "Fig. 1, brushed aluminium: concentric cylinders turning into spheres (left), radial cylinders (right)",
+               {{0, -4.4, 4.6}, {0, 0, 0.3}, 40}, width, height,
+               {{"quad-left.obj", 1.0, {1, 1}, grey, "brushed"}, {"quad-right.obj", 1.0, {1, 1}, grey, "brushed-radial"}});
+    writeScene(inputs / "fig8-velvet.toml", "Fig. 8, velvet: cylinders orthogonal to a bump of 256 faces",
+               {{0, -7.5, 4.5}, {0, 0, 0.5}, 40}, width, height, {{"bump-256.obj", 0.2, {1, 1}, grey, "velvet"}},
+               {-1, 0.15, -0.7});
     writeScene(inputs / "study-forest.toml", "the forest of Fig. 9 at half size, for the error-against-time study",
-               {{0, -25, 10}, {0, 0, 0.8}, 40}, std::max(16, width / 2), std::max(12, height / 2), "hill-578.obj", 0.7,
-               {1, 1}, soil, "bush");
+               {{0, -25, 10}, {0, 0, 0.8}, 40}, std::max(16, width / 2), std::max(12, height / 2),
+               {{"hill-578.obj", 0.7, {1, 1}, soil, "bush"}});
     writeScene(inputs / "fig4-bush.toml", "Fig. 4, one texel at successive octree levels", {{0, -3.2, 2.6}, {0, 0, 0.8}, 40},
-               height, height, "quad.obj", 2.0, {1, 1}, soil, "bush");
+               height, height, {{"quad.obj", 2.0, {1, 1}, soil, "bush"}});
 
     // The pipeline.
     std::ostringstream p;
@@ -141,29 +181,43 @@ RunReport runDemo(const DemoOptions& options) {
       << "[pipeline]\noutput = \"..\"\n\n";
     for (const char* pattern : {"grass", "bush", "fur", "brushed", "blocks"})
         p << "[[source]]\nname = \"" << pattern << "\"\npattern = \"" << pattern << "\"\nseed = " << options.seed << "\n\n";
-    for (const char* pattern : {"grass", "bush", "fur", "brushed", "blocks"})
-        p << "[[texel]]\nname = \"" << pattern << "\"\nsource = \"" << pattern << "\"\nresolution = "
+    // Fig. 1's right half, Fig. 8's hairs all orthogonal to the surface, Fig. 6's spheres.
+    p << "[[source]]\nname = \"brushed-radial\"\npattern = \"brushed\"\nvariant = \"radial\"\nseed = " << options.seed
+      << "\n\n[[source]]\nname = \"velvet\"\npattern = \"fur\"\nfluctuation = 0.0\nseed = " << options.seed
+      << "\n\n[[source]]\nname = \"spheres\"\nfile = \"sphere.obj\"\nfit = \"cell\"\n\n";
+    for (const char* texel : {"grass", "bush", "fur", "brushed", "blocks", "brushed-radial", "velvet", "spheres"})
+        p << "[[texel]]\nname = \"" << texel << "\"\nsource = \"" << texel << "\"\nresolution = "
           << options.maxResolution << "\n\n";
-    auto render = [&](const std::string& name, const std::string& scene, const std::string& texel, double bias = 0,
-                      int spp = 1) {
-        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\ntexels = { cover = \"" << texel
-          << "\" }\nlod_bias = " << bias << "\nspp = " << spp << "\n\n";
+    // A scene's texels bound to builds: `texel` names the build of `cover`, `second` (if any) of
+    // `cover2`.
+    auto bindings = [](const std::string& texel, const std::string& second) {
+        return "texels = { cover = \"" + texel + "\"" + (second.empty() ? "" : ", cover2 = \"" + second + "\"") + " }";
     };
-    auto reference = [&](const std::string& name, const std::string& scene, const std::string& texel, int spp) {
-        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\ntexels = { cover = \"" << texel
-          << "\" }\nrenderer = \"reference\"\nspp = " << spp << "\n\n";
+    auto render = [&](const std::string& name, const std::string& scene, const std::string& texel, double bias = 0,
+                      int spp = 1, const std::string& second = {}) {
+        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\n" << bindings(texel, second)
+          << "\nlod_bias = " << bias << "\nspp = " << spp << "\n\n";
+    };
+    auto reference = [&](const std::string& name, const std::string& scene, const std::string& texel, int spp,
+                         const std::string& second = {}) {
+        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\n" << bindings(texel, second)
+          << "\nrenderer = \"reference\"\nspp = " << spp << "\n\n";
     };
     auto compare = [&](const std::string& a, const std::string& b, const std::string& name) {
         p << "[[compare]]\nname = \"" << name << "\"\na = \"" << a << "\"\nb = \"" << b << "\"\n\n";
     };
     // Each figure with its explicit-geometry reference and its measured error.
-    const std::vector<std::array<std::string, 3>> figures = {
-        {"fig7-grass-hill", "fig7-grass-hill.toml", "grass"}, {"fig6-bush-field", "fig6-bush-field.toml", "bush"},
-        {"fig10-fur-torus", "fig10-fur-torus.toml", "fur"},   {"fig9-forest-hill", "fig9-forest-hill.toml", "bush"},
-        {"fig11-blocks", "fig11-blocks.toml", "blocks"},      {"fig1-brushed", "fig1-brushed.toml", "brushed"}};
-    for (const auto& [name, scene, texel] : figures) {
-        render(name, scene, texel);
-        reference(name + "-reference", scene, texel, options.referenceSpp);
+    const std::vector<std::array<std::string, 4>> figures = {
+        {"fig7-grass-hill", "fig7-grass-hill.toml", "grass", ""},
+        {"fig6-bush-field", "fig6-bush-field.toml", "bush", "spheres"},
+        {"fig10-fur-torus", "fig10-fur-torus.toml", "fur", ""},
+        {"fig9-forest-hill", "fig9-forest-hill.toml", "bush", ""},
+        {"fig11-blocks", "fig11-blocks.toml", "blocks", ""},
+        {"fig1-brushed", "fig1-brushed.toml", "brushed", "brushed-radial"},
+        {"fig8-velvet", "fig8-velvet.toml", "velvet", ""}};
+    for (const auto& [name, scene, texel, second] : figures) {
+        render(name, scene, texel, 0, 1, second);
+        reference(name + "-reference", scene, texel, options.referenceSpp, second);
         compare(name, name + "-reference", name + "-vs-reference");
     }
     // Fig. 4: the levels side by side, each against the reference (its error) and beside the
