@@ -3,6 +3,8 @@
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 
+#include "demo_topiary.h"
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -140,6 +142,17 @@ RunReport runDemo(const DemoOptions& options) {
                  [](double u, double v) { return Point{5 * u, 100 * v, 0}; }, "Fig. 6, the bushes' half");
     writeGridObj(inputs / "field-spheres.obj", 5, 100, false, false,
                  [](double u, double v) { return Point{5 + 5 * u, 100 * v, 0}; }, "Fig. 6, the spheres' half");
+    for (int i = 0; i < 3; ++i)
+        writeGridObj(inputs / ("fig5-face-" + std::to_string(i + 1) + ".obj"), 1, 1, false, false,
+                     [i](double u, double v) { return Point{2.2 * (u + i) - 3.3, 2.2 * v - 1.1, 0}; },
+                     "Fig. 5, one of three faces");
+    // Fig. 5's texels: a ball of leaves, a block of needles, a cone of beads, each in its frame.
+    detail::writeTopiaryObj(inputs / "topiary-leaves.obj", detail::TopiaryShape::Ball, detail::TopiaryElement::Leaves,
+                            2000, options.seed);
+    detail::writeTopiaryObj(inputs / "topiary-needles.obj", detail::TopiaryShape::Block,
+                            detail::TopiaryElement::Needles, 2000, options.seed);
+    detail::writeTopiaryObj(inputs / "topiary-beads.obj", detail::TopiaryShape::Cone, detail::TopiaryElement::Beads,
+                            1500, options.seed);
     writeGridObj(inputs / "bump-256.obj", 16, 16, false, false, hill(3, 3, 1.2, 2.5), "Fig. 8, a bump");
     // Fig. 6's other texel: a sphere, as a source file (a UV sphere; the poles' rings stop short
     // of the poles, whose quads would collapse).
@@ -166,6 +179,12 @@ RunReport runDemo(const DemoOptions& options) {
                "Fig. 1, brushed aluminium: concentric cylinders turning into spheres (left), radial cylinders (right)",
                {{0, -4.4, 4.6}, {0, 0, 0.3}, 40}, width, height,
                {{"quad-left.obj", 1.0, {1, 1}, grey, "brushed"}, {"quad-right.obj", 1.0, {1, 1}, grey, "brushed-radial"}});
+    writeScene(inputs / "fig5-topiary.toml",
+               "Fig. 5, trimmed bushes of leaves, needles and beads, each texel in a frame whose shadow falls on its floor",
+               {{0, -7.6, 5.0}, {0, 0, 0.8}, 40}, width, height,
+               {{"fig5-face-1.obj", 2.2, {1, 1}, grey, "topiary-leaves"},
+                {"fig5-face-2.obj", 2.2, {1, 1}, grey, "topiary-needles"},
+                {"fig5-face-3.obj", 2.2, {1, 1}, grey, "topiary-beads"}});
     writeScene(inputs / "fig8-velvet.toml", "Fig. 8, velvet: cylinders orthogonal to a bump of 256 faces",
                {{0, -7.5, 4.5}, {0, 0, 0.5}, 40}, width, height, {{"bump-256.obj", 0.2, {1, 1}, grey, "velvet"}},
                {-1, 0.15, -0.7});
@@ -185,39 +204,45 @@ RunReport runDemo(const DemoOptions& options) {
     p << "[[source]]\nname = \"brushed-radial\"\npattern = \"brushed\"\nvariant = \"radial\"\nseed = " << options.seed
       << "\n\n[[source]]\nname = \"velvet\"\npattern = \"fur\"\nfluctuation = 0.0\nseed = " << options.seed
       << "\n\n[[source]]\nname = \"spheres\"\nfile = \"sphere.obj\"\nfit = \"cell\"\n\n";
-    for (const char* texel : {"grass", "bush", "fur", "brushed", "blocks", "brushed-radial", "velvet", "spheres"})
+    for (const char* topiary : {"topiary-leaves", "topiary-needles", "topiary-beads"})
+        p << "[[source]]\nname = \"" << topiary << "\"\nfile = \"" << topiary << ".obj\"\nfit = \"cell\"\n\n";
+    for (const char* texel : {"grass", "bush", "fur", "brushed", "blocks", "brushed-radial", "velvet", "spheres",
+                              "topiary-leaves", "topiary-needles", "topiary-beads"})
         p << "[[texel]]\nname = \"" << texel << "\"\nsource = \"" << texel << "\"\nresolution = "
           << options.maxResolution << "\n\n";
-    // A scene's texels bound to builds: `texel` names the build of `cover`, `second` (if any) of
-    // `cover2`.
-    auto bindings = [](const std::string& texel, const std::string& second) {
-        return "texels = { cover = \"" + texel + "\"" + (second.empty() ? "" : ", cover2 = \"" + second + "\"") + " }";
+    // A scene's texels bound to builds: `texels` (a space-separated list) names the builds of
+    // `cover`, `cover2`, … in turn.
+    auto bindings = [](const std::string& texels) {
+        std::istringstream in(texels);
+        std::string text = "texels = {", texel;
+        for (std::size_t i = 0; in >> texel; ++i) text += (i ? ", " : " ") + coverName(i) + " = \"" + texel + "\"";
+        return text + " }";
     };
-    auto render = [&](const std::string& name, const std::string& scene, const std::string& texel, double bias = 0,
-                      int spp = 1, const std::string& second = {}) {
-        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\n" << bindings(texel, second)
+    auto render = [&](const std::string& name, const std::string& scene, const std::string& texels, double bias = 0,
+                      int spp = 1) {
+        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\n" << bindings(texels)
           << "\nlod_bias = " << bias << "\nspp = " << spp << "\n\n";
     };
-    auto reference = [&](const std::string& name, const std::string& scene, const std::string& texel, int spp,
-                         const std::string& second = {}) {
-        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\n" << bindings(texel, second)
+    auto reference = [&](const std::string& name, const std::string& scene, const std::string& texels, int spp) {
+        p << "[[render]]\nname = \"" << name << "\"\nscene = \"" << scene << "\"\n" << bindings(texels)
           << "\nrenderer = \"reference\"\nspp = " << spp << "\n\n";
     };
     auto compare = [&](const std::string& a, const std::string& b, const std::string& name) {
         p << "[[compare]]\nname = \"" << name << "\"\na = \"" << a << "\"\nb = \"" << b << "\"\n\n";
     };
     // Each figure with its explicit-geometry reference and its measured error.
-    const std::vector<std::array<std::string, 4>> figures = {
-        {"fig7-grass-hill", "fig7-grass-hill.toml", "grass", ""},
-        {"fig6-bush-field", "fig6-bush-field.toml", "bush", "spheres"},
-        {"fig10-fur-torus", "fig10-fur-torus.toml", "fur", ""},
-        {"fig9-forest-hill", "fig9-forest-hill.toml", "bush", ""},
-        {"fig11-blocks", "fig11-blocks.toml", "blocks", ""},
-        {"fig1-brushed", "fig1-brushed.toml", "brushed", "brushed-radial"},
-        {"fig8-velvet", "fig8-velvet.toml", "velvet", ""}};
-    for (const auto& [name, scene, texel, second] : figures) {
-        render(name, scene, texel, 0, 1, second);
-        reference(name + "-reference", scene, texel, options.referenceSpp, second);
+    const std::vector<std::array<std::string, 3>> figures = {
+        {"fig7-grass-hill", "fig7-grass-hill.toml", "grass"},
+        {"fig6-bush-field", "fig6-bush-field.toml", "bush spheres"},
+        {"fig10-fur-torus", "fig10-fur-torus.toml", "fur"},
+        {"fig9-forest-hill", "fig9-forest-hill.toml", "bush"},
+        {"fig11-blocks", "fig11-blocks.toml", "blocks"},
+        {"fig1-brushed", "fig1-brushed.toml", "brushed brushed-radial"},
+        {"fig8-velvet", "fig8-velvet.toml", "velvet"},
+        {"fig5-topiary", "fig5-topiary.toml", "topiary-leaves topiary-needles topiary-beads"}};
+    for (const auto& [name, scene, texels] : figures) {
+        render(name, scene, texels);
+        reference(name + "-reference", scene, texels, options.referenceSpp);
         compare(name, name + "-reference", name + "-vs-reference");
     }
     // Fig. 4: the levels side by side, each against the reference (its error) and beside the
