@@ -202,6 +202,11 @@ struct OctreeBuilder::Impl {
     void buildAll(Progress& progress) {
         levels.assign(L() + 1, {});
         std::vector<Level> sources(L() + 1);
+        // Sized first: grown by doubling, the finest level (millions of nodes) was copied and its
+        // fresh pages cleared about twice over.
+        std::vector<std::size_t> counts(L() + 1, 0);
+        for (const auto& b : volume.blocks) ++counts[b.level];
+        for (std::uint32_t l = 0; l <= L(); ++l) sources[l].reserve(counts[l]);
         for (const auto& b : volume.blocks)
             sources[b.level].push_back(PNode{b.key, b.data, std::numeric_limits<float>::quiet_NaN(), kSource});
         std::uint64_t total = 0;
