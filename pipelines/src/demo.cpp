@@ -101,28 +101,10 @@ void writeScene(const fs::path& file, const std::string& title, const Shot& shot
     writeFileAtomically(file, toml.str());
 }
 
-}  // namespace
-
-RunReport runDemo(const DemoOptions& options) {
-    // The seed goes into the pipeline file, whose integers are signed 64-bit: a larger one made
-    // a pipeline the demo could not read, after its inputs were written (found by fuzz_cli.py).
-    if (options.seed > std::uint64_t(std::numeric_limits<std::int64_t>::max()))
-        throw std::invalid_argument("demo: the seed must be at most 2^63 - 1");
-    // The inputs are written before runPipeline() checks the folder: checked here first.
-    checkOutputFolder(options.outputDirectory);
-    const fs::path inputs = options.outputDirectory / "inputs";
-    std::error_code error;
-    fs::create_directories(inputs, error);
-    if (error) throw IoError(inputs, "cannot create the output directory: " + error.message());
-    const int width = std::max(16, int(std::lround(768 * options.imageScale)));
-    const int height = std::max(12, int(std::lround(576 * options.imageScale)));
-    const Point soil{0.30, 0.24, 0.16}, grey{0.45, 0.45, 0.47};
+// The demo's base meshes and source files, into `inputs`.
+void writeDemoMeshes(const fs::path& inputs, std::uint64_t seed) {
     const double pi = std::numbers::pi;
-
-    // Base meshes.
     writeGridObj(inputs / "hill-1404.obj", 36, 39, false, false, hill(9, 9.75, 3, 40), "Fig. 7, a hill");
-    writeGridObj(inputs / "field-50x500.obj", 10, 100, false, false,
-                 [](double u, double v) { return Point{10 * u, 100 * v, 0}; }, "Fig. 6, a flat region");
     writeGridObj(inputs / "torus-240.obj", 20, 12, true, true,
                  [pi](double u, double v) {
                      const double a = 2 * pi * u, b = 2 * pi * v, r = 2 + 0.8 * std::cos(b);
@@ -148,11 +130,11 @@ RunReport runDemo(const DemoOptions& options) {
                      "Fig. 5, one of three faces");
     // Fig. 5's texels: a ball of leaves, a block of needles, a cone of beads, each in its frame.
     detail::writeTopiaryObj(inputs / "topiary-leaves.obj", detail::TopiaryShape::Ball, detail::TopiaryElement::Leaves,
-                            2000, options.seed);
+                            2000, seed);
     detail::writeTopiaryObj(inputs / "topiary-needles.obj", detail::TopiaryShape::Block,
-                            detail::TopiaryElement::Needles, 2000, options.seed);
+                            detail::TopiaryElement::Needles, 2000, seed);
     detail::writeTopiaryObj(inputs / "topiary-beads.obj", detail::TopiaryShape::Cone, detail::TopiaryElement::Beads,
-                            1500, options.seed);
+                            1500, seed);
     writeGridObj(inputs / "bump-256.obj", 16, 16, false, false, hill(3, 3, 1.2, 2.5), "Fig. 8, a bump");
     // Fig. 6's other texel: a sphere, as a source file (a UV sphere; the poles' rings stop short
     // of the poles, whose quads would collapse).
@@ -162,8 +144,12 @@ RunReport runDemo(const DemoOptions& options) {
                      return Point{std::sin(b) * std::cos(a), std::sin(b) * std::sin(a), -std::cos(b)};
                  },
                  "a sphere");
+}
 
-    // Scenes, one per figure.
+// One scene per figure (and the study's), `width` × `height` pixels (Figs. 1's and 4's square
+// sizes from `height`).
+void writeDemoScenes(const fs::path& inputs, int width, int height) {
+    const Point soil{0.30, 0.24, 0.16}, grey{0.45, 0.45, 0.47};
     writeScene(inputs / "fig7-grass-hill.toml", "Fig. 7, grass on a hill of 1404 faces", {{0, -19, 4.2}, {0, 0, 1.4}, 40},
                width, height, {{"hill-1404.obj", 0.3, {2, 2}, soil, "grass"}});
     writeScene(inputs / "fig6-bush-field.toml", "Fig. 6, bushes and spheres tiling a 50x500 region to the horizon",
@@ -193,8 +179,11 @@ RunReport runDemo(const DemoOptions& options) {
                {{"hill-578.obj", 0.7, {1, 1}, soil, "bush"}});
     writeScene(inputs / "fig4-bush.toml", "Fig. 4, one texel at successive octree levels", {{0, -3.2, 2.6}, {0, 0, 0.8}, 40},
                height, height, {{"quad.obj", 2.0, {1, 1}, soil, "bush"}});
+}
 
-    // The pipeline.
+// The pipeline: the sources, the texels, each figure with its reference and comparison, the
+// Fig. 4 series and the error-against-time study.
+std::string demoPipeline(const DemoOptions& options) {
     std::ostringstream p;
     p << "# vtex demo: the paper's showcase, rebuilt from the procedural patterns\n"
       << "[pipeline]\noutput = \"..\"\n\n";
@@ -270,7 +259,27 @@ RunReport runDemo(const DemoOptions& options) {
             render(name, "study-forest.toml", "bush", bias, spp);
             compare(name, "study-truth", name + "-vs-truth");
         }
-    writeFileAtomically(inputs / "pipeline.toml", p.str());
+    return p.str();
+}
+
+}  // namespace
+
+RunReport runDemo(const DemoOptions& options) {
+    // The seed goes into the pipeline file, whose integers are signed 64-bit: a larger one made
+    // a pipeline the demo could not read, after its inputs were written (found by fuzz_cli.py).
+    if (options.seed > std::uint64_t(std::numeric_limits<std::int64_t>::max()))
+        throw std::invalid_argument("demo: the seed must be at most 2^63 - 1");
+    // The inputs are written before runPipeline() checks the folder: checked here first.
+    checkOutputFolder(options.outputDirectory);
+    const fs::path inputs = options.outputDirectory / "inputs";
+    std::error_code error;
+    fs::create_directories(inputs, error);
+    if (error) throw IoError(inputs, "cannot create the output directory: " + error.message());
+    const int width = std::max(16, int(std::lround(768 * options.imageScale)));
+    const int height = std::max(12, int(std::lround(576 * options.imageScale)));
+    writeDemoMeshes(inputs, options.seed);
+    writeDemoScenes(inputs, width, height);
+    writeFileAtomically(inputs / "pipeline.toml", demoPipeline(options));
 
     RunOptions run = options.run;
     run.output = options.outputDirectory;
