@@ -7,7 +7,7 @@
 // (GLIBC_TUNABLES=glibc.malloc.hugetlb=1) the build took 0.54–0.63 s and `vtex sample` 0.65–0.9 s
 // instead of 1.5–1.8 s. That switch is read at process start, so the vtex executable does the same
 // itself: its operator new asks for huge pages (madvise MADV_HUGEPAGE) on the whole 2 MiB pages
-// inside every allocation of 8 MiB or more, before anything touches them. Memory still comes from
+// inside every allocation of 2 MiB or more, before anything touches them. Memory still comes from
 // malloc and goes back with free; a touched huge page is resident whole, so the resident set can
 // grow by at most 2 MiB per such allocation. The libraries and the tests keep the plain
 // allocator, and so do sanitizer builds, whose operator new checks new/delete pairs.
