@@ -9,6 +9,7 @@
 #include <vtex/sampler/sampler.h>
 
 #include <memory>
+#include <string>
 
 namespace vtex::render::test {
 
@@ -17,15 +18,27 @@ struct SourcedTexel {
     std::shared_ptr<const vtex::octree::Octree> tree;
 };
 
-inline SourcedTexel makeBush(int leaves, int resolution) {
+// The pattern `name` with `count` elements, sampled at `resolution`³ (cyclic when the pattern
+// is), with its source mesh.
+inline SourcedTexel makeSourcedTexel(const std::string& name, int count, int resolution) {
     vtex::sampler::PatternOptions pattern;
-    pattern.count = leaves;
-    auto mesh = std::make_shared<const vtex::ingest::TriangleMesh>(vtex::sampler::makePattern("bush", pattern));
+    pattern.count = count;
+    auto mesh = std::make_shared<const vtex::ingest::TriangleMesh>(vtex::sampler::makePattern(name, pattern));
     vtex::sampler::SampleOptions sampling;
     sampling.resolution = resolution;
+    sampling.cyclic = vtex::sampler::isCyclicPattern(name);
     vtex::NullProgress progress;
     const auto volume = vtex::sampler::sampleMesh(*mesh, sampling, progress);
     return SourcedTexel{mesh, std::make_shared<const vtex::octree::Octree>(vtex::octree::buildOctree(volume, {}, progress))};
+}
+
+inline SourcedTexel makeBush(int leaves, int resolution) { return makeSourcedTexel("bush", leaves, resolution); }
+
+// Adds `texel` with its source mesh to a scene; returns its index.
+inline std::size_t addSourcedTexel(Scene& scene, const SourcedTexel& texel, double tau = 1) {
+    const std::size_t index = addTexel(scene, texel.tree, tau);
+    scene.texels[index].sourceData = texel.mesh;
+    return index;
 }
 
 // A small bush (400 leaves of the `bush` pattern) sampled at 64³: the benchmark's texel, scaled
@@ -39,8 +52,7 @@ inline const SourcedTexel& smallBush() {
 inline Scene bushField(const Eigen::Vector3d& eye, int size = 64, const SourcedTexel& bush = smallBush()) {
     Scene scene = baseScene(eye, Eigen::Vector3d(0.5, 0.5, 0.4), 40, size);
     scene.lights[0].direction = Eigen::Vector3d(-1, -0.5, -1).normalized();
-    const auto texel = addTexel(scene, bush.tree);
-    scene.texels[texel].sourceData = bush.mesh;
+    const auto texel = addSourcedTexel(scene, bush);
     scene.texels[texel].material.specular = Color::Zero();
     addSurface(scene, gridMesh(-1, -1, 2, 2, 0, 3), texel, 1.0);
     scene.surfaces.back().material.diffuse = Color(0.35, 0.28, 0.2);
