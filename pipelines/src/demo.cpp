@@ -3,8 +3,6 @@
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
 
-#include "demo_topiary.h"
-
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -101,8 +99,8 @@ void writeScene(const fs::path& file, const std::string& title, const Shot& shot
     writeFileAtomically(file, toml.str());
 }
 
-// The demo's base meshes and source files, into `inputs`.
-void writeDemoMeshes(const fs::path& inputs, std::uint64_t seed) {
+// The demo's base meshes and the sphere of Fig. 6, into `inputs`.
+void writeDemoMeshes(const fs::path& inputs) {
     const double pi = std::numbers::pi;
     writeGridObj(inputs / "hill-1404.obj", 36, 39, false, false, hill(9, 9.75, 3, 40), "Fig. 7, a hill");
     writeGridObj(inputs / "torus-240.obj", 20, 12, true, true,
@@ -128,13 +126,6 @@ void writeDemoMeshes(const fs::path& inputs, std::uint64_t seed) {
         writeGridObj(inputs / ("fig5-face-" + std::to_string(i + 1) + ".obj"), 1, 1, false, false,
                      [i](double u, double v) { return Point{2.2 * (u + i) - 3.3, 2.2 * v - 1.1, 0}; },
                      "Fig. 5, one of three faces");
-    // Fig. 5's texels: a ball of leaves, a block of needles, a cone of beads, each in its frame.
-    detail::writeTopiaryObj(inputs / "topiary-leaves.obj", detail::TopiaryShape::Ball, detail::TopiaryElement::Leaves,
-                            2000, seed);
-    detail::writeTopiaryObj(inputs / "topiary-needles.obj", detail::TopiaryShape::Block,
-                            detail::TopiaryElement::Needles, 2000, seed);
-    detail::writeTopiaryObj(inputs / "topiary-beads.obj", detail::TopiaryShape::Cone, detail::TopiaryElement::Beads,
-                            1500, seed);
     writeGridObj(inputs / "bump-256.obj", 16, 16, false, false, hill(3, 3, 1.2, 2.5), "Fig. 8, a bump");
     // Fig. 6's other texel: a sphere, as a source file (a UV sphere; the poles' rings stop short
     // of the poles, whose quads would collapse).
@@ -193,8 +184,10 @@ std::string demoPipeline(const DemoOptions& options) {
     p << "[[source]]\nname = \"brushed-radial\"\npattern = \"brushed\"\nvariant = \"radial\"\nseed = " << options.seed
       << "\n\n[[source]]\nname = \"velvet\"\npattern = \"fur\"\nfluctuation = 0.0\nseed = " << options.seed
       << "\n\n[[source]]\nname = \"spheres\"\nfile = \"sphere.obj\"\nfit = \"cell\"\n\n";
-    for (const char* topiary : {"topiary-leaves", "topiary-needles", "topiary-beads"})
-        p << "[[source]]\nname = \"" << topiary << "\"\nfile = \"" << topiary << ".obj\"\nfit = \"cell\"\n\n";
+    // Fig. 5's three kinds of topiary, each in its frame.
+    for (const char* variant : {"leaves", "needles", "beads"})
+        p << "[[source]]\nname = \"topiary-" << variant << "\"\npattern = \"topiary\"\nvariant = \"" << variant
+          << "\"\nseed = " << options.seed << "\n\n";
     for (const char* texel : {"grass", "bush", "fur", "brushed", "blocks", "brushed-radial", "velvet", "spheres",
                               "topiary-leaves", "topiary-needles", "topiary-beads"})
         p << "[[texel]]\nname = \"" << texel << "\"\nsource = \"" << texel << "\"\nresolution = "
@@ -277,7 +270,7 @@ RunReport runDemo(const DemoOptions& options) {
     if (error) throw IoError(inputs, "cannot create the output directory: " + error.message());
     const int width = std::max(16, int(std::lround(768 * options.imageScale)));
     const int height = std::max(12, int(std::lround(576 * options.imageScale)));
-    writeDemoMeshes(inputs, options.seed);
+    writeDemoMeshes(inputs);
     writeDemoScenes(inputs, width, height);
     writeFileAtomically(inputs / "pipeline.toml", demoPipeline(options));
 

@@ -329,6 +329,53 @@ ingest::TriangleMesh brushed(const PatternOptions& o) {
     return mb.take();
 }
 
+// Topiary (Fig. 5: "buissons taillés … avec divers types de primitives locales", the texel in a
+// frame whose shadow falls on the ground): a bush trimmed to a shape and made of one kind of
+// element — a ball of flat leaves (variant "leaves", the default), a block of needles ("needles")
+// or a cone of beads ("beads") — inside twelve bars along the cube's edges.
+ingest::TriangleMesh topiary(const PatternOptions& o) {
+    const std::string variant = o.variant.empty() ? "leaves" : o.variant;
+    if (variant != "leaves" && variant != "needles" && variant != "beads")
+        throw std::invalid_argument("topiary: --variant must be leaves, needles or beads");
+    Rng rng(o.seed);
+    MeshBuilder mb;
+    const int green = mb.material(0.12f, 0.36f, 0.07f), frame = mb.material(0.55f, 0.55f, 0.57f);
+    const auto inside = [&](const Vec3& p) {
+        if (variant == "leaves") return (p - Vec3(0.5, 0.5, 0.45)).norm() < 0.36;
+        if (variant == "needles")
+            return (p.array() > Eigen::Array3d(0.22, 0.22, 0.08)).all() && (p.array() < Eigen::Array3d(0.78, 0.78, 0.64)).all();
+        const double t = (p.z() - 0.08) / 0.8;  // the cone: 0 at its base, 1 at its tip
+        return t > 0 && t < 1 && std::hypot(p.x() - 0.5, p.y() - 0.5) < 0.34 * (1 - t);
+    };
+    const int elements = o.count > 0 ? o.count : variant == "beads" ? 1500 : 2000;
+    for (int placed = 0, tries = 0; placed < elements && tries < 100 * elements; ++tries) {
+        const Vec3 p(rng.uniform(), rng.uniform(), rng.uniform());
+        if (!inside(p)) continue;
+        ++placed;
+        const Vec3 n = rng.unitVector(), u = orthogonal(n), w = n.cross(u);
+        if (variant == "leaves") {  // a square leaf 0.05 across
+            constexpr double r = 0.025;
+            mb.quad(p - r * u - r * w, p + r * u - r * w, p + r * u + r * w, p - r * u + r * w, green);
+        } else if (variant == "needles") {  // 0.1 long, 0.006 across
+            mb.tube({p - 0.05 * n, p + 0.05 * n}, [](std::size_t) { return 0.003; }, 3, green);
+        } else {  // a bead of radius 0.02
+            Eigen::Matrix3d axes;
+            axes << u, w, n;
+            mb.ellipsoid(p, axes, Vec3::Constant(0.02), green, 6, 4);
+        }
+    }
+    // The frame: bars 0.02 thick along the twelve edges of [0.01, 0.99]² × [0, 0.98].
+    constexpr double lo = 0.01, hi = 0.99, top = 0.98, t = 0.02;
+    for (const double a : {lo, hi - t}) {
+        for (const double b : {lo, hi - t}) mb.box(Vec3(a, b, 0), Vec3(a + t, b + t, top), frame);  // uprights
+        for (const double z : {0.0, top - t}) {
+            mb.box(Vec3(lo, a, z), Vec3(hi, a + t, z + t), frame);  // along x
+            mb.box(Vec3(a, lo, z), Vec3(a + t, hi, z + t), frame);  // along y
+        }
+    }
+    return mb.take();
+}
+
 // Building elements (Fig. 11): walls, slabs, columns, and rods and plates thinner than a voxel
 // at 128³ (1/128 ≈ 0.0078).
 ingest::TriangleMesh blocks(const PatternOptions& o) {
@@ -479,7 +526,7 @@ ingest::TriangleMesh wrapIntoUnitTile(const ingest::TriangleMesh& mesh) {
 }
 
 const std::vector<std::string>& patternNames() {
-    static const std::vector<std::string> names{"grass", "bush", "fur", "brushed", "blocks"};
+    static const std::vector<std::string> names{"grass", "bush", "fur", "brushed", "blocks", "topiary"};
     return names;
 }
 
@@ -488,7 +535,7 @@ bool isCyclicPattern(std::string_view name) { return name == "grass" || name == 
 bool patternUses(std::string_view pattern, std::string_view option) {
     if (option == "seed" || option == "count") return true;
     if (option == "fluctuation" || option == "lean") return pattern == "grass" || pattern == "fur";
-    if (option == "variant") return pattern == "brushed";
+    if (option == "variant") return pattern == "brushed" || pattern == "topiary";
     return false;
 }
 
@@ -515,7 +562,8 @@ ingest::TriangleMesh build(std::string_view name, const PatternOptions& options)
     if (name == "fur") return fur(options);
     if (name == "brushed") return brushed(options);
     if (name == "blocks") return blocks(options);
-    throw std::invalid_argument("unknown pattern '" + std::string(name) + "' (grass, bush, fur, brushed, blocks)");
+    if (name == "topiary") return topiary(options);
+    throw std::invalid_argument("unknown pattern '" + std::string(name) + "' (grass, bush, fur, brushed, blocks, topiary)");
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <map>
 #include <set>
@@ -453,6 +454,27 @@ TEST(Patterns, AreDeterministicPerSeedAndInsideTheUnitCube) {
     PatternOptions bush;
     EXPECT_EQ(makePattern("bush", bush).triangles.size(), 2000u * 8u);  // 2000 leaves by default
     EXPECT_THROW(makePattern("lawn", bush), std::invalid_argument);
+}
+
+// Fig. 5's topiary: each variant is `count` elements of its kind (a leaf two triangles, a
+// three-sided needle six) and the frame's twelve bars (twelve triangles each, in the second
+// material); an unknown variant is refused.
+TEST(Patterns, TopiaryIsItsElementsInAFrame) {
+    for (const std::string variant : {"leaves", "needles", "beads"}) {
+        PatternOptions o;
+        o.count = 100;
+        o.variant = variant;
+        const auto mesh = makePattern("topiary", o);
+        const auto frame = std::count(mesh.triangleMaterials.begin(), mesh.triangleMaterials.end(), 1u);
+        EXPECT_EQ(frame, 12 * 12) << variant;
+        const std::size_t elements = mesh.triangles.size() - std::size_t(frame);
+        if (variant == "leaves") EXPECT_EQ(elements, 100u * 2) << variant;
+        if (variant == "needles") EXPECT_EQ(elements, 100u * 6) << variant;
+        if (variant == "beads") EXPECT_GE(elements, 100u * 8) << variant;
+    }
+    PatternOptions bad;
+    bad.variant = "radial";
+    EXPECT_THROW(makePattern("topiary", bad), std::invalid_argument);
 }
 
 TEST(Patterns, BlocksHaveElementsThinnerThanAVoxelAt128) {

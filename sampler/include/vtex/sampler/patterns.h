@@ -4,7 +4,8 @@
 /// F. Neyret 1994: grass (Fig. 7: blades of decreasing V section in a cyclic volume), bush
 /// (Figs. 5–6: up to 2000 leaves), fur (Figs. 8 and 10: thin cylinders, cyclic), brushed
 /// aluminium (Fig. 1: concentric cylinders turning into spheres, or radial cylinders) and
-/// building blocks (Fig. 11: elements sometimes thinner than a voxel). Every pattern lies in the
+/// building blocks (Fig. 11: elements sometimes thinner than a voxel), topiary (Fig. 5: a bush
+/// trimmed to a ball of leaves, a block of needles or a cone of beads, in a frame). Every pattern lies in the
 /// unit reference cube, z up, and is deterministic for a seed (its own generator, not the
 /// platform's distributions). Cyclic patterns are tileable: whatever crosses the tile's x or y
 /// border is cut there and the cut-off part is moved to the opposite side, so the mesh stays in
@@ -23,7 +24,8 @@ namespace vtex::sampler {
 struct PatternOptions {
     std::uint64_t seed = 1;
     /// Number of elements: blades (grass, default 16), leaves (bush, default 2000), hairs (fur,
-    /// default 300), rings or spokes (brushed, default 9 / 24), elements (blocks, default 24).
+    /// default 300), rings or spokes (brushed, default 9 / 24), elements (blocks, default 24;
+    /// topiary, default 2000, beads 1500).
     /// 0 = the default.
     int count = 0;
     /// Angular fluctuation of the elements' directions, radians (standard deviation); < 0 = the
@@ -31,15 +33,15 @@ struct PatternOptions {
     double fluctuation = -1;
     /// Mean lean of blades and hairs from the vertical toward +x, degrees.
     double leanDegrees = 0;
-    /// brushed: "concentric" (default) or "radial".
+    /// brushed: "concentric" (default) or "radial"; topiary: "leaves" (default), "needles" or "beads".
     std::string variant;
 };
 
-/// grass, bush, fur, brushed, blocks.
+/// grass, bush, fur, brushed, blocks, topiary.
 const std::vector<std::string>& patternNames();
 /// Whether `pattern` reads the option `option` ("seed", "count", "fluctuation", "lean",
 /// "variant"): every pattern takes a seed and a count, grass and fur a fluctuation and a lean,
-/// brushed a variant. An option a pattern does not use is refused by the command line and the
+/// brushed and topiary a variant. An option a pattern does not use is refused by the command line and the
 /// pipeline file rather than silently ignored.
 bool patternUses(std::string_view pattern, std::string_view option);
 /// The patterns that use `option`, as "grass and fur", for messages.
