@@ -13,8 +13,13 @@ present), the image and each variant are rendered with `vtex render ARGS...`, an
 per view gives the bias (row mean / truth mean − 1) of R/G/B for the image, and of G for the three
 variants, and the image's RMSE against DIR/truth_VIEW.exr (bush_field.sh's truth).
 
+With BORDER=K in the environment, the ground seen and the lit ground are also split between the
+field's interior and its K outer rows of cells (the ground written as inner.obj and ring.obj, the
+other part black; truths cached as DIR/truth_VIEW_{gcov,bl}{in,ring}.exr): one more row per view.
+
 Usage: bench/bush_field_decompose.py VTEX DIR [SPP] [-- RENDER ARGS...]
   e.g. bench/bush_field_decompose.py build/apps/vtex/vtex /tmp/bfbench 256 -- --level-fit off
+       BORDER=3 bench/bush_field_decompose.py build/apps/vtex/vtex /tmp/bfbench 256
 """
 import json
 import os
@@ -41,6 +46,41 @@ def compare(vtex, a, b):
     return json.loads(out)
 
 
+def split_ground(border):
+    """ground.obj's faces into inner.obj (at least `border` units inside the field's edge) and
+    ring.obj (the rest)."""
+    vertices, faces = [], []
+    with open('ground.obj') as f:
+        for line in f:
+            if line.startswith('v '):
+                vertices.append(tuple(float(x) for x in line.split()[1:3]))
+            elif line.startswith('f '):
+                faces.append([int(x.split('/')[0]) for x in line.split()[1:]])
+    lo = [min(v[k] for v in vertices) for k in (0, 1)]
+    hi = [max(v[k] for v in vertices) for k in (0, 1)]
+    parts = {'inner.obj': [], 'ring.obj': []}
+    for face in faces:
+        c = [sum(vertices[i - 1][k] for i in face) / len(face) for k in (0, 1)]
+        inner = all(c[k] - lo[k] > border and hi[k] - c[k] > border for k in (0, 1))
+        parts['inner.obj' if inner else 'ring.obj'].append(face)
+    for name, part in parts.items():
+        with open(name, 'w') as f:
+            f.writelines('v %r %r 0\n' % v for v in vertices)
+            f.writelines('f ' + ' '.join(map(str, face)) + '\n' for face in part)
+
+
+def part_variant(text, name, lit):
+    """Variant `name` ('gcov' or 'bl') with only the ground part `lit` ('in' or 'ring') showing."""
+    text = variant(text, name)
+    head, surface = text[:text.index('[[surface]]')], text[text.index('[[surface]]'):]
+    material = re.search(r'material\s*=\s*\{[^}]*\}', surface).group(0)
+    black = 'material = { diffuse = [0, 0, 0], specular = [0, 0, 0], ambient = [0, 0, 0] }'
+    inner = surface.replace('ground.obj', 'inner.obj')
+    ring = surface.replace('ground.obj', 'ring.obj')
+    inner, ring = (inner, ring.replace(material, black)) if lit == 'in' else (inner.replace(material, black), ring)
+    return head + inner + '\n' + ring
+
+
 def main():
     args = sys.argv[1:]
     extra = []
@@ -51,7 +91,10 @@ def main():
         sys.exit(__doc__)
     vtex, folder = os.path.abspath(args[0]), args[1]
     spp = args[2] if len(args) > 2 else '256'
+    border = int(os.environ['BORDER']) if os.environ.get('BORDER') else None
     os.chdir(folder)
+    if border is not None:
+        split_ground(border)
     print('| view | image R / G / B % | ground seen / lit ground / lit leaves (G) % | image RMSE |')
     print('| --- | --- | --- | ---: |')
     for view in ('far', 'mid'):
@@ -71,6 +114,20 @@ def main():
         image = compare(vtex, 'decompose.exr', 'truth_%s.exr' % view)
         print('| %s | %s | %s | %.5f |' % (view, ' / '.join('%+.1f' % (100 * b) for b in image['bias']),
                                            ' / '.join('%+.1f' % b for b in biases), image['rmse']))
+        if border is not None:
+            parts = []
+            for lit in ('in', 'ring'):
+                for name in ('gcov', 'bl'):
+                    scene = '%s_%s%s.toml' % (view, name, lit)
+                    with open(scene, 'w') as f:
+                        f.write(part_variant(text, name, lit))
+                    truth = 'truth_%s_%s%s.exr' % (view, name, lit)
+                    if not os.path.exists(truth):
+                        subprocess.run([vtex, 'reference', scene, '-o', truth, '--spp', spp, '-q'], check=True)
+                    subprocess.run([vtex, 'render', scene, '-o', 'decompose.exr', '-q'] + extra, check=True)
+                    parts.append(100 * compare(vtex, 'decompose.exr', truth)['bias'][1])
+            print('| %s, interior / %d outer rows | ground seen / lit ground: %+.1f / %+.1f %% | %+.1f / %+.1f %% | |'
+                  % (view, border, parts[0], parts[1], parts[2], parts[3]))
 
 
 if __name__ == '__main__':
