@@ -2,6 +2,8 @@
 // distribution through the closed-form sampler of Heitz et al. 2015 (Listing 3) on a fixed lattice.
 #include <vtex/primitive/reflectance_kernel.h>
 
+#include "fibre_specular.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -34,6 +36,33 @@ struct ReflectanceKernel::Lattice {
 
 namespace {
 
+// The lobe's fixed points (strategy B of the specular term, reflectance_kernel.h): mirror
+// directions r around v drawn from the normalised Phong lobe (n+1)/2π cosⁿα by its inverse
+// cumulative distribution, cos α = ξ^{1/(n+1)} at ξ = (k+½)/K, azimuth on the golden angle.
+// They depend on the shininess alone; a thread keeps the last shininess's, since a scene's
+// texels rarely have more than one and the powers are the costliest part of a kernel's setup.
+struct LobeLattice {
+    static constexpr int kCount = ReflectanceKernel::kLobeSamples;
+    double shininess = -1;
+    std::array<double, kCount> cosAlpha{}, sinAlpha{}, cosPower{}, cosPhi{}, sinPhi{};
+    static const LobeLattice& forShininess(double n) {
+        thread_local LobeLattice cached;
+        if (cached.shininess != n) {
+            const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
+            for (std::size_t k = 0; k < std::size_t(kCount); ++k) {
+                const double xi = (double(k) + 0.5) / kCount;
+                cached.cosAlpha[k] = std::pow(xi, 1 / (n + 1));
+                cached.sinAlpha[k] = std::sqrt(std::max(0.0, 1 - cached.cosAlpha[k] * cached.cosAlpha[k]));
+                cached.cosPower[k] = std::pow(xi, n / (n + 1));  // cosⁿα
+                cached.cosPhi[k] = std::cos(golden * double(k));
+                cached.sinPhi[k] = std::sin(golden * double(k));
+            }
+            cached.shininess = n;
+        }
+        return cached;
+    }
+};
+
 // The shininess as a whole number in [0, 1024], for which xⁿ is taken by repeated squaring
 // (exact to a few ulps, ~6 multiplies instead of a libm pow); −1 otherwise.
 int wholePower(double n) { return n >= 0 && n <= 1024 && n == std::floor(n) ? int(n) : -1; }
@@ -48,8 +77,19 @@ const std::array<double, 65> kCosCutoffs = [] {
 
 }  // namespace
 
-ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view, double shininess, int samples)
-    : mShininess(shininess), mWholePower(wholePower(shininess)) {
+double ReflectanceKernel::power(double c) const {
+    if (mWholePower < 0) return std::pow(c, mShininess);
+    double result = 1;
+    for (int e = mWholePower; e > 0; e >>= 1) {
+        if (e & 1) result *= c;
+        c *= c;
+    }
+    return result;
+}
+
+ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view, double shininess, int samples,
+                                     bool specular)
+    : mShininess(shininess), mWholePower(wholePower(shininess)), mSpecular(specular) {
     static const Lattice l8(8), l16(16), l32(32), l64(64);
     mLattice = samples <= 8 ? &l8 : samples <= 16 ? &l16 : samples <= 32 ? &l32 : &l64;
     // Orthonormal basis (wk, wj, wi) with wi = view (Frisvad/Duff's branchless construction).
@@ -77,6 +117,26 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
                                              : std::pow(1e-6, 1 / shininess));
     mDiffuseScale = 1 / (mLattice->n * std::numbers::pi);
     mSpecularScale = (shininess + 2) / (2 * std::numbers::pi) / mLattice->n;
+    if (specular && shininess >= 0) setUpLobe();
+}
+
+// Strategy B: the half vector between l and each of the lobe's mirror directions r (in the
+// kernel's frame, where v = (0, 0, 1)); those facing away from v see nothing and are dropped.
+void ReflectanceKernel::setUpLobe() {
+    const LobeLattice& lobe = LobeLattice::forShininess(mShininess);
+    const Vector3d l = mLight.cast<double>();
+    for (std::size_t k = 0; k < std::size_t(kLobeSamples); ++k) {
+        const Vector3d r(lobe.sinAlpha[k] * lobe.cosPhi[k], lobe.sinAlpha[k] * lobe.sinPhi[k], lobe.cosAlpha[k]);
+        const Vector3d sum = l + r;
+        const double length = sum.norm();
+        if (!(length > 1e-12)) continue;
+        const Vector3d n = sum / length;
+        if (!(n.z() > 0)) continue;
+        mLobeNormal[std::size_t(mLobeCount)] = n;
+        mLobeTerm[std::size_t(mLobeCount)] = n.dot(l) * lobe.cosPower[k];
+        ++mLobeCount;
+    }
+    mLobeRatio = double(kLobeSamples) / mLattice->n * 2 * (mShininess + 1);
 }
 
 ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
@@ -113,6 +173,49 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
     const Vector3d Mk(std::sqrt(std::abs(det) * Sii) * r, 0, 0);
     const Vector3d Mj(cross * r, blockDet * r, 0);
     const Vector3d Mi(invSqrtSii * Ski, invSqrtSii * Sji, invSqrtSii * Sii);
+    // The VNDF sampler's map m = C u, C = [Mk Mj Mi] upper triangular: |det C| / |C u|³ is the
+    // density of normals per unit of u, which the balance weights need (reflectance_kernel.h).
+    const double detC = Mk.x() * Mj.y() * Mi.z();
+    const double scale = Mi.z();  // = √Sii: folded into the float terms to keep them O(1)
+    std::optional<double> fibre;
+    if (mSpecular) {
+        // A needle much thinner than the lobe: neither strategy finds the short arc where the
+        // lobe crosses its circle of normals; the fibre limit integrates along that circle.
+        Eigen::Matrix3d sFrame;
+        sFrame << Skk, Skj, Ski, Skj, Sjj, Sji, Ski, Sji, Sii;
+        fibre = detail::fibreSpecular(sFrame, mLight.cast<double>(), Vector3d(0, 0, 1), mShininess,
+                                      [this](double c) { return power(c); });
+    }
+    const bool mis = mSpecular && !fibre && mLobeCount > 0 && detC > 0;
+    const double lobeRatio = mis ? mLobeRatio * detC / (scale * scale * scale) : 0;
+    const auto [diffuse, latticeSpecular] = latticeSums(Mk, Mj, Mi, scale, lobeRatio, mSpecular && !fibre);
+    if (!mSpecular) return {diffuse * mDiffuseScale, 0};
+    if (fibre) return {diffuse * mDiffuseScale, *fibre};
+    double specular = latticeSpecular;
+    if (mis) {
+        // Strategy B: each half vector's pre-image q = C⁻¹N (back substitution), at which A's
+        // density is (q_z/|q|)/π and B's is (n+1)/2π cosⁿα 4(N·l) · |det C| |q|³.
+        // term / (1 + ratio) with ratio = K term |det C| |q|⁴ / q_z, written with one division.
+        const double inverseK = 1 / Mk.x(), inverseJ = 1 / Mj.y(), inverseI = 1 / Mi.z();
+        const double factor = mLobeRatio * detC;
+        for (std::size_t k = 0; k < std::size_t(mLobeCount); ++k) {
+            const Vector3d& n = mLobeNormal[k];
+            const double qz = n.z() * inverseI;
+            const double qy = (n.y() - Mi.y() * qz) * inverseJ;
+            const double qx = (n.x() - Mj.x() * qy - Mi.x() * qz) * inverseK;
+            const double q2 = qx * qx + qy * qy + qz * qz;
+            const double term = mLobeTerm[k];
+            const double contribution = term * qz / (qz + factor * term * q2 * q2);
+            if (std::isfinite(contribution)) specular += contribution;
+        }
+    }
+    return {diffuse * mDiffuseScale, specular * mSpecularScale};
+}
+
+// Strategy A's sums over the lattice: Σ (N·l)⁺ and Σ (N·l)⁺cosⁿα / (1 + ratio), the second with
+// B's balance weight (ratio = K_B p_B / K_A p_A; lobeRatio 0 without B).
+std::pair<double, double> ReflectanceKernel::latticeSums(const Vector3d& Mk, const Vector3d& Mj, const Vector3d& Mi,
+                                                         double scale, double lobeRatio, bool wantSpecular) const {
     const Lattice& points = *mLattice;
     // m = u·Mk + v·Mj + w·Mi with Mk = (·,0,0), Mj = (·,·,0): written out. The sum runs in
     // single precision, four lattice points at a time (SSE2, part of every x86-64): its
@@ -123,6 +226,7 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
     const __m128 lx = _mm_set1_ps(mLight.x()), ly = _mm_set1_ps(mLight.y()), lz = _mm_set1_ps(mLight.z());
     const __m128 lvv = lz, cut = _mm_set1_ps(mCosCutoff);
     const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), two = _mm_set1_ps(2.0f);
+    const __m128 scaleV = _mm_set1_ps(float(scale)), ratioV = _mm_set1_ps(float(lobeRatio));
     __m128 diffuseSum = zero, specularSum = zero;
     for (int n = 0; n < points.n; n += 4) {
         const __m128 u = _mm_load_ps(&points.x[std::size_t(n)]);
@@ -138,6 +242,7 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
         const __m128 invLen = _mm_div_ps(one, _mm_sqrt_ps(_mm_max_ps(len2, _mm_set1_ps(1e-30f))));
         const __m128 nl = _mm_mul_ps(ml, invLen);
         diffuseSum = _mm_add_ps(diffuseSum, _mm_and_ps(lit, nl));
+        if (!wantSpecular) continue;
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
         const __m128 cosAlpha = _mm_sub_ps(_mm_mul_ps(_mm_mul_ps(two, nl), _mm_mul_ps(mz, invLen)), lvv);
         const __m128 specular = _mm_and_ps(lit, _mm_cmpgt_ps(cosAlpha, cut));
@@ -159,13 +264,17 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
             for (int k = 0; k < 4; ++k) c[k] = lanes & (1 << k) ? float(std::pow(double(c[k]), mShininess)) : 0.0f;
             p = _mm_load_ps(c);
         }
-        specularSum = _mm_add_ps(specularSum, _mm_and_ps(specular, _mm_mul_ps(nl, p)));
+        const __m128 term = _mm_mul_ps(nl, p);
+        const __m128 s = _mm_mul_ps(invLen, scaleV);
+        // term / (1 + ratio), ratio = K term (s|m|⁻¹)³ / w: term·w / (w + K term s³), one division.
+        const __m128 weighted = _mm_mul_ps(_mm_mul_ps(ratioV, term), _mm_mul_ps(s, _mm_mul_ps(s, s)));
+        specularSum = _mm_add_ps(specularSum, _mm_and_ps(specular, _mm_div_ps(_mm_mul_ps(term, w), _mm_add_ps(w, weighted))));
     }
     alignas(16) float sums[8];
     _mm_store_ps(sums, diffuseSum);
     _mm_store_ps(sums + 4, specularSum);
-    const double diffuse = double(sums[0]) + double(sums[1]) + double(sums[2]) + double(sums[3]);
-    const double specular = double(sums[4]) + double(sums[5]) + double(sums[6]) + double(sums[7]);
+    return {double(sums[0]) + double(sums[1]) + double(sums[2]) + double(sums[3]),
+            double(sums[4]) + double(sums[5]) + double(sums[6]) + double(sums[7])};
 #else
     const Vector3d l = mLight.cast<double>();
     double diffuse = 0, specular = 0;
@@ -182,6 +291,7 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
         const double invLen = 1 / std::sqrt(len2);
         const double nl = ml * invLen;
         diffuse += nl;
+        if (!wantSpecular) continue;
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
         const double cosAlpha = 2 * nl * (mz * invLen) - l.z();
         if (!(cosAlpha > mCosCutoff)) continue;
@@ -195,14 +305,16 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
         } else {
             power = std::pow(cosAlpha, mShininess);
         }
-        specular += nl * power;
+        const double term = nl * power, s = invLen * scale;
+        specular += term / (1 + lobeRatio * term * s * s * s / w);
     }
+    return {diffuse, specular};
 #endif
-    return {diffuse * mDiffuseScale, specular * mSpecularScale};
 }
 
-ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light, const Vector3d& view, double shininess, int samples) {
-    return ReflectanceKernel(light, view, shininess, samples)(s);
+ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light, const Vector3d& view, double shininess, int samples,
+                                   bool specular) {
+    return ReflectanceKernel(light, view, shininess, samples, specular)(s);
 }
 
 }  // namespace vtex::primitive

@@ -18,6 +18,10 @@ namespace {
 // wide): soft shadows need less detail than what is seen, and this halves their cost.
 constexpr double kShadowConeScale = 2.0;
 
+// A material without specular colour needs no specular factor: the fast kernel then skips the
+// Phong lobe's points (reflectance_kernel.h).
+bool hasSpecular(const Material& m) { return (m.specular.array() != 0).any(); }
+
 // What one march keeps per light as it goes: the last shadow query and the last reflectance.
 struct MarchLight {
     primitive::ReflectanceFactors reflectance;
@@ -72,7 +76,8 @@ SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const
         sl.directional = true;
         lightAt(scene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
         sl.usable = referenceLight(sl.lw, sl.lr);
-        if (sl.usable && options.shading == ShadingMode::Fast) sl.kernel.emplace(sl.lr, Vec3(-dir), texel.material.shininess);
+        if (sl.usable && options.shading == ShadingMode::Fast)
+            sl.kernel.emplace(sl.lr, Vec3(-dir), texel.material.shininess, 16, hasSpecular(texel.material));
         if (sl.usable) sl.latticeSlot = shadows.latticeSlot(sl.lw, INFINITY, prim.index);
     }
 }
@@ -173,7 +178,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                     ++counters.reflectance;
                     ml.reflectance = sl.kernel ? (*sl.kernel)(sMatrix)
                                      : mOptions.shading == ShadingMode::Fast
-                                         ? primitive::reflectanceFast(sMatrix, lr, view, m.shininess)
+                                         ? primitive::reflectanceFast(sMatrix, lr, view, m.shininess, 16, hasSpecular(m))
                                          : primitive::reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
                     ml.haveReflectance = true;
                 }

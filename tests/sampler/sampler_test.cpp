@@ -468,9 +468,9 @@ TEST(Patterns, TopiaryIsItsElementsInAFrame) {
         const auto frame = std::count(mesh.triangleMaterials.begin(), mesh.triangleMaterials.end(), 1u);
         EXPECT_EQ(frame, 12 * 12) << variant;
         const std::size_t elements = mesh.triangles.size() - std::size_t(frame);
-        if (variant == "leaves") EXPECT_EQ(elements, 100u * 2) << variant;
-        if (variant == "needles") EXPECT_EQ(elements, 100u * 6) << variant;
-        if (variant == "beads") EXPECT_GE(elements, 100u * 8) << variant;
+        if (variant == "leaves") { EXPECT_EQ(elements, 100u * 2) << variant; }
+        if (variant == "needles") { EXPECT_EQ(elements, 100u * 6) << variant; }
+        if (variant == "beads") { EXPECT_GE(elements, 100u * 8) << variant; }
     }
     PatternOptions bad;
     bad.variant = "radial";

@@ -14,27 +14,54 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <utility>
 
 namespace vtex::primitive {
 
 /// The fast path. Since f(N)(N·v)⁺ / A(v) is the distribution of visible normals D_v (Heitz,
 /// Dupuy, Crassin, Dachsbacher, "The SGGX microflake distribution", SIGGRAPH 2015, §4 and
-/// Listing 3 for its closed-form sampling), R(l,v) = E_{N∼D_v}[(N·l)⁺ ρ(N,l,v)] exactly; it is
-/// estimated with `samples` fixed points (a Fibonacci lattice on the unit disc mapped through
+/// Listing 3 for its closed-form sampling), R(l,v) = E_{N∼D_v}[(N·l)⁺ ρ(N,l,v)] exactly.
+///
+/// Diffuse: `samples` fixed points of D_v (a Fibonacci lattice on the unit disc mapped through
 /// the closed-form VNDF sampler), so the result is deterministic and smooth in l and v.
+///
+/// Specular: those points alone miss a Phong lobe narrower than the spread of the normals (a
+/// sphere at shininess 100: +135 %), and points of the lobe alone miss normals narrower than
+/// the lobe (discs). The kernel combines both sets by multiple importance sampling (Veach's
+/// balance heuristic): strategy A, the D_v lattice; strategy B, kLobeSamples mirror directions
+/// drawn from the normalised Phong lobe around v, each giving the half vector N between l and
+/// it, whose density over normals is (n+1)/2π cosⁿα · 4(N·l). Both densities are evaluated
+/// on the pre-image sphere of the VNDF sampler's linear map m = C u (where D_v is a cosine
+/// around the sampler's axis, Heitz et al. §4), so the weights need no eigen-decomposition:
+/// the Jacobian from u to N is |det C| / |C u|³. B's directions depend on (l, v, shininess)
+/// alone and are set up once per kernel. A needle much thinner than the lobe defeats both (its
+/// normals lie on a circle that the lobe crosses on a short arc): when its axis ratio is below
+/// kFibreGate (0.15) times the lobe's width 1/√(n+1), the specular factor is instead the limit
+/// of an ideal fibre of elliptic cross-section, a 16-node quadrature along that circle
+/// (src/fibre_specular.h). Errors against the paper's integration are measured
+/// by bench/vtex_specular_estimators, per family of shapes and shininess (docs/micro-primitive.md).
 ///
 /// Along one ray segment v is constant, and so is l for a directional light, while S changes
 /// from voxel to voxel: the kernel keeps what depends on (l, v, shininess, samples) alone, so
-/// that a call only projects S into the frame around v and sums the lattice. The cost per call
+/// that a call only projects S into the frame around v and sums the lattices. The cost per call
 /// is measured by bench/render_shading_bench, the error against the reference by
-/// bench/render_reflectance_error.
+/// bench/render_reflectance_error. A kernel built with `specular` false returns specular 0 and
+/// skips strategy B: texels without specular colour (the default) pay nothing for it.
 class ReflectanceKernel {
 public:
-    ReflectanceKernel(const Eigen::Vector3d& light, const Eigen::Vector3d& view, double shininess, int samples = 16);
+    /// Mirror directions of strategy B (the lobe's points).
+    static constexpr int kLobeSamples = 8;
+
+    ReflectanceKernel(const Eigen::Vector3d& light, const Eigen::Vector3d& view, double shininess, int samples = 16,
+                      bool specular = true);
     ReflectanceFactors operator()(const SggxMatrix& s) const;
 
 private:
     struct Lattice;
+    void setUpLobe();
+    std::pair<double, double> latticeSums(const Eigen::Vector3d& mk, const Eigen::Vector3d& mj, const Eigen::Vector3d& mi,
+                                          double scale, double lobeRatio, bool wantSpecular) const;
+    double power(double c) const;  ///< cⁿ: by squaring for a whole n ≤ 1024
     const Lattice* mLattice;
     /// S in the orthonormal basis (wk, wj, wi = view) as a linear map of S's six entries
     /// (xx, yy, zz, xy, xz, yz) to (kk, jj, ii, kj, ki, ji): row e holds the six outputs'
@@ -45,10 +72,18 @@ private:
     int mWholePower;  ///< the shininess when it is a whole number in [0, 1024], else −1
     float mCosCutoff;
     double mDiffuseScale, mSpecularScale;
+    bool mSpecular;
+    /// (K_B / K_A) · 2(n+1): the ratio of B's density to A's at a lattice point is this times
+    /// |det C| (N·l) cosⁿα / (w |C u|³), w the point's height on the disc's hemisphere.
+    double mLobeRatio = 0;
+    /// Strategy B's half vectors in (wk, wj, wi), those facing v; their (N·l) cosⁿα.
+    std::array<Eigen::Vector3d, kLobeSamples> mLobeNormal;
+    std::array<double, kLobeSamples> mLobeTerm{};
+    int mLobeCount = 0;
 };
 
 /// ReflectanceKernel(light, view, shininess, samples)(s), for a single evaluation.
 ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Eigen::Vector3d& light, const Eigen::Vector3d& view,
-                                   double shininess, int samples = 16);
+                                   double shininess, int samples = 16, bool specular = true);
 
 }  // namespace vtex::primitive

@@ -1,0 +1,198 @@
+// The fast path's specular factor (ReflectanceKernel: the D_v lattice and the Phong lobe's
+// points combined by multiple importance sampling) and the lattice alone (the fast path before
+// issue 15's row 16), per family of shapes and shininess, against an unbiased Monte Carlo
+// estimate of the same integral; the paper's method at 96 cells per axis beside it as a check
+// of that truth (docs/micro-primitive.md, "The specular term of the fast path").
+//   build/bench/vtex_specular_estimators [cases per family] [Monte Carlo samples per case]
+#include <vtex/octree/octree.h>
+#include <vtex/primitive/packing.h>
+#include <vtex/primitive/reflectance_kernel.h>
+#include <vtex/core/progress.h>
+#include <vtex/sampler/patterns.h>
+#include <vtex/sampler/sampler.h>
+
+#include <Eigen/Dense>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <random>
+#include <vector>
+
+using namespace vtex::primitive;
+using V = Eigen::Vector3d;
+using M = Eigen::Matrix3d;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+struct Frame {
+    V k, j, i;
+};
+Frame frameAround(const V& v) {
+    const double sign = std::copysign(1.0, v.z());
+    const double a = -1.0 / (sign + v.z());
+    const double b = v.x() * v.y() * a;
+    return {V(1 + sign * v.x() * v.x() * a, sign * b, -sign * v.x()), V(b, sign + v.y() * v.y() * a, -v.y()), v};
+}
+
+// The integral ∫ D_v(N) (N·l)⁺ (n+2)/2π cosⁿα dN in plain double precision: D_v through the
+// SGGX density of S, its samples through Heitz et al.'s VNDF sampler written with Eigen.
+class Specular {
+public:
+    Specular(const M& s, const V& l, const V& v, double n)
+        : mS(s), mInv(s.inverse()), mSqrtDet(std::sqrt(std::max(s.determinant(), 1e-300))),
+          mArea(std::sqrt(v.dot(s * v))), mL(l), mV(v), mN(n), mFrame(frameAround(v)) {
+        const M t = basis() * s * basis().transpose();
+        const double sii = t(2, 2), blockDet = std::max(t(1, 1) * sii - t(1, 2) * t(1, 2), 1e-300);
+        mMk = V(std::sqrt(std::abs(t.determinant()) / blockDet), 0, 0);
+        mMj = V((t(0, 1) * sii - t(0, 2) * t(1, 2)) / std::sqrt(sii * blockDet), std::sqrt(blockDet / sii), 0);
+        mMi = t.col(2) / std::sqrt(sii);
+    }
+    // A visible normal from a point of the unit disc.
+    V visibleNormal(double x, double y) const {
+        const V m = x * mMk + y * mMj + std::sqrt(std::max(0.0, 1 - x * x - y * y)) * mMi;
+        return basis().transpose() * m.normalized();
+    }
+    // The half vector of l and a mirror direction drawn from the Phong lobe around v.
+    V lobeNormal(double xi, double phi) const {
+        const double c = std::pow(xi, 1 / (mN + 1)), s = std::sqrt(std::max(0.0, 1 - c * c));
+        const V r = s * std::cos(phi) * mFrame.k + s * std::sin(phi) * mFrame.j + c * mFrame.i;
+        return (mL + r).normalized();
+    }
+    double densityA(const V& n) const {
+        const double nv = n.dot(mV), q = n.dot(mInv * n);
+        return nv > 0 ? nv / (kPi * mSqrtDet * q * q * mArea) : 0;
+    }
+    double cosAlpha(const V& n) const { return 2 * n.dot(mL) * n.dot(mV) - mL.dot(mV); }
+    double densityB(const V& n) const {
+        const double nl = n.dot(mL), c = cosAlpha(n);
+        return nl > 0 && c > 0 ? (mN + 1) / (2 * kPi) * std::pow(c, mN) * 4 * nl : 0;
+    }
+    double integrand(const V& n) const {
+        const double nl = n.dot(mL), c = cosAlpha(n);
+        return nl > 0 && c > 0 ? densityA(n) * nl * (mN + 2) / (2 * kPi) * std::pow(c, mN) : 0;
+    }
+    // Unbiased: one random sample of each strategy per round, balance heuristic.
+    double monteCarlo(std::mt19937& rng, int rounds) const {
+        std::uniform_real_distribution<double> u(0, 1);
+        double sum = 0;
+        for (int k = 0; k < rounds; ++k) {
+            const double r = std::sqrt(u(rng)), phi = 2 * kPi * u(rng);
+            for (const V& n : {visibleNormal(r * std::cos(phi), r * std::sin(phi)), lobeNormal(u(rng), 2 * kPi * u(rng))}) {
+                const double f = integrand(n);
+                if (f > 0) sum += f / (densityA(n) + densityB(n));
+            }
+        }
+        return sum / rounds;
+    }
+    // The 16-point D_v lattice alone: the fast path before row 16.
+    double latticeOnly() const {
+        const double golden = kPi * (3 - std::sqrt(5.0));
+        double sum = 0;
+        for (int i = 0; i < 16; ++i) {
+            const double r = std::sqrt((i + 0.5) / 16);
+            const V n = visibleNormal(r * std::cos(golden * i), r * std::sin(golden * i));
+            const double nl = n.dot(mL), c = cosAlpha(n);
+            if (nl > 0 && c > 0) sum += nl * (mN + 2) / (2 * kPi) * std::pow(c, mN);
+        }
+        return sum / 16;
+    }
+
+private:
+    M basis() const {
+        M b;
+        b.row(0) = mFrame.k;
+        b.row(1) = mFrame.j;
+        b.row(2) = mFrame.i;
+        return b;
+    }
+    M mS, mInv;
+    double mSqrtDet, mArea;
+    V mL, mV;
+    double mN;
+    Frame mFrame;
+    V mMk, mMj, mMi;
+};
+
+// The S of random stored voxels of every level of a 64³ `bush` texel (400 leaves).
+std::vector<M> bushVoxels(std::mt19937& rng, int count) {
+    vtex::sampler::PatternOptions pattern;
+    pattern.count = 400;
+    const auto mesh = vtex::sampler::makePattern("bush", pattern);
+    vtex::sampler::SampleOptions sampling;
+    sampling.resolution = 64;
+    vtex::NullProgress progress;
+    const auto tree = vtex::octree::buildOctree(vtex::sampler::sampleMesh(mesh, sampling, progress), {}, progress);
+    std::vector<M> all;
+    for (const auto& level : tree.levels)
+        for (const auto& node : level)
+            if (!node.data.isEmpty()) all.push_back(unpackS(node.data.rotation, node.data.sigma).matrix());
+    std::shuffle(all.begin(), all.end(), rng);
+    all.resize(std::min<std::size_t>(all.size(), std::size_t(count)));
+    return all;
+}
+
+double percentile95(std::vector<double> x) {
+    if (x.empty()) return 0;
+    std::sort(x.begin(), x.end());
+    return x[std::size_t(0.95 * double(x.size() - 1))];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const int perFamily = argc > 1 ? std::atoi(argv[1]) : 100;
+    const int rounds = argc > 2 ? std::atoi(argv[2]) : 50000;
+    std::mt19937 rng(1);
+    std::normal_distribution<double> g;
+    std::uniform_real_distribution<double> logRatio(-4, 0);
+    const char* families[] = {"sphere", "random 1…1e-4", "disc 1e-3", "needle 1e-3", "bush voxels"};
+    std::vector<std::vector<M>> shapes(5);
+    for (int family = 0; family < 4; ++family)
+        for (int k = 0; k < perFamily; ++k) {
+            const M r = Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
+            const V sigma = family == 0   ? V(1, 1, 1)
+                            : family == 1 ? V(std::pow(10.0, logRatio(rng)), std::pow(10.0, logRatio(rng)), 1)
+                            : family == 2 ? V(1e-3, 1e-3, 1)
+                                          : V(1, 1, 1e-3);
+            shapes[std::size_t(family)].push_back(r * sigma.cwiseAbs2().asDiagonal() * r.transpose());
+        }
+    shapes[4] = bushVoxels(rng, perFamily);
+    std::printf("mean |error| / mean and 95th percentile of |error| / mean, against Monte Carlo (%d rounds)\n", rounds);
+    std::printf("%9s %-14s %8s | %-15s | %-15s | %s\n", "shininess", "family", "mean", "lattice alone", "fast path",
+                "paper 96 cells vs MC");
+    for (const double n : {1.0, 10.0, 100.0, 1000.0})
+        for (std::size_t family = 0; family < 5; ++family) {
+            std::vector<double> truth, lattice, fast, paper;
+            for (const M& s : shapes[family]) {
+                const V l(g(rng), g(rng), g(rng)), v(g(rng), g(rng), g(rng));
+                const Specular integral(s, l.normalized(), v.normalized(), n);
+                std::mt19937 mc(7);
+                truth.push_back(integral.monteCarlo(mc, rounds));
+                lattice.push_back(integral.latticeOnly());
+                const SggxMatrix m = SggxMatrix::fromUpper(s);
+                fast.push_back(reflectanceFast(m, l.normalized(), v.normalized(), n).specular);
+                paper.push_back(reflectanceReference(m, l.normalized(), v.normalized(), n, 96).specular);
+            }
+            double mean = 0;
+            for (double t : truth) mean += t / double(truth.size());
+            auto errors = [&](const std::vector<double>& x, double& meanError) {
+                std::vector<double> e;
+                meanError = 0;
+                for (std::size_t i = 0; i < x.size(); ++i) {
+                    e.push_back(std::abs(x[i] - truth[i]) / mean);
+                    meanError += e.back() / double(x.size());
+                }
+                return percentile95(e);
+            };
+            double lm, fm, pm;
+            const double lp = errors(lattice, lm), fp = errors(fast, fm), pp = errors(paper, pm);
+            std::printf("%9.0f %-14s %8.4f | %6.3f / %6.3f | %6.3f / %6.3f | %6.3f / %6.3f\n", n, families[family], mean, lm,
+                        lp, fm, fp, pm, pp);
+        }
+}
