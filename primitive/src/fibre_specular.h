@@ -1,12 +1,13 @@
-// The specular factor of a thin needle in the limit of an ideal fibre (reflectance_kernel.h). A needle's normals lie on the great circle orthogonal to its
-// axis t; in the limit of an ideal fibre of elliptic cross-section (the 2×2 block S₂ of S
-// orthogonal to t), the visible normals are distributed along the circle's angle φ as
-// ρ(N)(N·v)⁺ / W with ρ(N) = 1/(√det S₂ (NᵀS₂⁻¹N)^{3/2}) the cross-section's radius of curvature
-// and W = 2√(vᵀS₂v) its width seen from v (for a round fibre: (N·v)⁺ / (2|v⊥|)). The integral
-// over φ runs on the arc where N faces both l and v, by two Gauss–Legendre rules through tangent
-// maps, one centred on the half vector's direction with the lobe's width, the other on the
-// cross-section's flattest side (ρ's peak) with S₂'s axis ratio, combined by the power
-// heuristic: each rule integrates the part of the integrand it resolves.
+// The specular factor of a thin needle in the limit of an ideal fibre (reflectance_kernel.h).
+// A needle's normals lie on the great circle orthogonal to its axis t; in the limit of an ideal
+// fibre of elliptic cross-section (the 2×2 block S₂ of S orthogonal to t), the visible normals
+// are distributed along the circle's angle φ as ρ(N)(N·v)⁺ / W with ρ(N) = 1/(√det S₂
+// (NᵀS₂⁻¹N)^{3/2}) the cross-section's radius of curvature and W = 2√(vᵀS₂v) its width seen
+// from v (for a round fibre: (N·v)⁺ / (2|v⊥|)). The integral over φ runs on the arc where N
+// faces both l and v, by an 8-node Gauss–Legendre rule through a tangent map centred on the
+// lobe's peak with its width; a flat cross-section adds a second rule centred on its flattest
+// side (ρ's peak) with S₂'s axis ratio, the two combined by the power heuristic, each
+// integrating the part of the integrand it resolves.
 #pragma once
 
 #include <Eigen/Dense>
@@ -23,8 +24,10 @@ namespace vtex::primitive::detail {
 /// grows with (axis ratio / lobe width); at 0.15 it is within 4 % (needles of ratio 1e-2 at
 /// shininess 100, ReflectanceKernel.FibreLimitAgreesWithThePapersIntegration).
 inline constexpr double kFibreGate = 0.15;
-/// The lobe rule's Cauchy scale in units of the lobe's standard deviation along the circle
-/// (measured: 1.4 halves the error of 1 on needles at shininess 10–1000).
+/// The lobe rule's Cauchy scale in units of the lobe's standard deviation along the circle:
+/// wider than the Gaussian it stands for, since 8 nodes resolve the lobe's tails poorly;
+/// chosen on needles against the paper's integration, whose agreement
+/// ReflectanceKernel.FibreLimitAgreesWithThePapersIntegration bounds.
 inline constexpr double kLobeSpread = 1.4;
 /// Below this axis ratio of the cross-section, a second rule follows its flattest side.
 inline constexpr double kFlatSection = 0.5;
@@ -76,21 +79,16 @@ std::optional<double> fibreSpecular(const Eigen::Matrix3d& s, const Eigen::Vecto
     const double width = 2 * std::sqrt(saa * v2.x() * v2.x() + 2 * sab * v2.x() * v2.y() + sbb * v2.y() * v2.y());
     // The arc where N·v > 0 and N·l > 0, as an interval of φ around v's angle.
     const double phiV = std::atan2(v2.y(), v2.x());
-    double lo = phiV - pi / 2, hi = phiV + pi / 2;
-    if (l2d.squaredNorm() > 1e-24) {
-        const double dl = std::remainder(std::atan2(l2d.y(), l2d.x()) - phiV, 2 * pi);
-        lo += std::max(dl, 0.0);
-        hi += std::min(dl, 0.0);
-    }
+    const double lPerp = l2d.norm(), vPerpLength = v2.norm();
+    const double dl = lPerp > 1e-12 ? std::remainder(std::atan2(l2d.y(), l2d.x()) - phiV, 2 * pi) : 0;
+    const double lo = phiV - pi / 2 + std::max(dl, 0.0), hi = phiV + pi / 2 + std::min(dl, 0.0);
     if (!(hi > lo)) return 0.0;
     const double middle = 0.5 * (lo + hi);
     const auto nearMiddle = [&](double phi) { return middle + std::remainder(phi - middle, 2 * pi); };
     // Along the circle, cos α = 2(N·l)(N·v) − l·v = |l⊥||v⊥|(cos(2φ − φ_l − φ_v) + cos(φ_l − φ_v))
     // − l·v peaks at the bisector of l⊥ and v⊥, where cosⁿα ≈ cosⁿα* exp(−2n|l⊥||v⊥|Δφ²/cos α*).
-    const double lPerp = l2d.norm(), vPerpLength = v2.norm();
     double lobeCentre = middle, lobeSpread = 1;
     if (lPerp > 1e-12) {
-        const double dl = std::remainder(std::atan2(l2d.y(), l2d.x()) - phiV, 2 * pi);
         lobeCentre = nearMiddle(phiV + 0.5 * dl);
         const double peak = lPerp * vPerpLength * (1 + std::cos(dl)) - l.dot(v);
         lobeSpread = std::clamp(std::sqrt(std::max(peak, 1e-3) / (4 * (shininess + 1) * lPerp * vPerpLength)), 1e-6, 1.0);
@@ -99,9 +97,12 @@ std::optional<double> fibreSpecular(const Eigen::Matrix3d& s, const Eigen::Vecto
     const std::array<double, 2> centre{lobeCentre, phiFlat};
     const std::array<double, 2> spread{kLobeSpread * lobeSpread,
                                        std::max(std::sqrt(std::min(saa, sbb) / std::max(saa, sbb)), 1e-6)};
+    // A round cross-section's ρ is nearly flat: the lobe's rule alone resolves the integrand,
+    // and a second rule's share of it (the power heuristic's partition) only adds error.
+    const std::size_t rules = spread[1] < kFlatSection ? 2 : 1;
     // A rule's density: the Cauchy distribution its tangent map draws, restricted to the arc.
     std::array<double, 2> s0{}, s1{};
-    for (std::size_t r = 0; r < 2; ++r) {
+    for (std::size_t r = 0; r < rules; ++r) {
         s0[r] = std::atan((lo - centre[r]) / spread[r]);
         s1[r] = std::atan((hi - centre[r]) / spread[r]);
     }
@@ -115,9 +116,6 @@ std::optional<double> fibreSpecular(const Eigen::Matrix3d& s, const Eigen::Vecto
     static constexpr std::array<double, 8> weights{0.1012285362903763, 0.2223810344533745, 0.3137066458778873,
                                                    0.3626837833783620, 0.3626837833783620, 0.3137066458778873,
                                                    0.2223810344533745, 0.1012285362903763};
-    // A round cross-section's ρ is nearly flat: the lobe's rule alone resolves the integrand,
-    // and a second rule's share of it (the power heuristic's partition) only adds error.
-    const std::size_t rules = spread[1] < kFlatSection ? 2 : 1;
     const double lv = l.dot(v);
     double total = 0;
     for (std::size_t r = 0; r < rules; ++r) {
@@ -133,9 +131,11 @@ std::optional<double> fibreSpecular(const Eigen::Matrix3d& s, const Eigen::Vecto
             // NᵀS₂⁻¹N = (sbb c² − 2 sab c s + saa s²) / det S₂.
             const double q = (sbb * c * c - 2 * sab * c * si + saa * si * si) / s2Det;
             const double rho = 1 / (std::sqrt(s2Det) * q * std::sqrt(q));
-            const double p0 = density(0, phi), p1 = density(1, phi);
-            const double own = r == 0 ? p0 : p1;
-            const double weight = rules == 1 ? 1.0 : own * own / (p0 * p0 + p1 * p1);
+            double weight = 1;
+            if (rules == 2) {
+                const double own = density(r, phi), other = density(1 - r, phi);
+                weight = own * own / (own * own + other * other);
+            }
             const double jacobian = spread[r] * (1 + tangent * tangent) * 0.5 * (s1[r] - s0[r]) * weights[k];
             total += jacobian * weight * rho * nv / width * nl * power(cosAlpha);
         }

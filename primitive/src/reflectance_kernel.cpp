@@ -295,17 +295,7 @@ std::pair<double, double> ReflectanceKernel::latticeSums(const Vector3d& Mk, con
         // cos α between v and the mirror of l about N: (2(N·l)N − l)·v.
         const double cosAlpha = 2 * nl * (mz * invLen) - l.z();
         if (!(cosAlpha > mCosCutoff)) continue;
-        double power = 1;
-        if (mWholePower >= 0) {
-            double base = cosAlpha;
-            for (int e = mWholePower; e > 0; e >>= 1) {
-                if (e & 1) power *= base;
-                base *= base;
-            }
-        } else {
-            power = std::pow(cosAlpha, mShininess);
-        }
-        const double term = nl * power, s = invLen * scale;
+        const double term = nl * power(cosAlpha), s = invLen * scale;
         specular += term / (1 + lobeRatio * term * s * s * s / w);
     }
     return {diffuse, specular};

@@ -26,7 +26,7 @@ namespace vtex::primitive {
 /// the closed-form VNDF sampler), so the result is deterministic and smooth in l and v.
 ///
 /// Specular: those points alone miss a Phong lobe narrower than the spread of the normals (a
-/// sphere at shininess 100: +135 %), and points of the lobe alone miss normals narrower than
+/// sphere at shininess 100: +155 %), and points of the lobe alone miss normals narrower than
 /// the lobe (discs). The kernel combines both sets by multiple importance sampling (Veach's
 /// balance heuristic): strategy A, the D_v lattice; strategy B, kLobeSamples mirror directions
 /// drawn from the normalised Phong lobe around v, each giving the half vector N between l and
@@ -37,7 +37,7 @@ namespace vtex::primitive {
 /// alone and are set up once per kernel. A needle much thinner than the lobe defeats both (its
 /// normals lie on a circle that the lobe crosses on a short arc): when its axis ratio is below
 /// kFibreGate (0.15) times the lobe's width 1/√(n+1), the specular factor is instead the limit
-/// of an ideal fibre of elliptic cross-section, a 16-node quadrature along that circle
+/// of an ideal fibre of elliptic cross-section, an 8- or 16-node quadrature along that circle
 /// (src/fibre_specular.h). Errors against the paper's integration are measured
 /// by bench/vtex_specular_estimators, per family of shapes and shininess (docs/micro-primitive.md).
 ///
@@ -46,7 +46,8 @@ namespace vtex::primitive {
 /// that a call only projects S into the frame around v and sums the lattices. The cost per call
 /// is measured by bench/render_shading_bench, the error against the reference by
 /// bench/render_reflectance_error. A kernel built with `specular` false returns specular 0 and
-/// skips strategy B: texels without specular colour (the default) pay nothing for it.
+/// skips strategy B and the fibre: texels without specular colour (the default) pay nothing for
+/// them.
 class ReflectanceKernel {
 public:
     /// Mirror directions of strategy B (the lobe's points).
