@@ -58,6 +58,9 @@ public:
         return -1;
     }
     const Grid& grid(int prim) const { return mGrids[std::size_t(prim)]; }
+    /// The lights' slots: their number and each one's unit direction toward the light.
+    std::size_t lights() const { return mDirections.size(); }
+    const Vec3& direction(int slot) const { return mDirections[std::size_t(slot)]; }
     /// No lattice at all (no directional light, or too many nodes).
     bool empty() const { return mDirections.empty(); }
 

@@ -4,6 +4,7 @@
 #include "march.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -107,6 +108,9 @@ constexpr int kExactDistanceLevel = 6;
 struct MarchVolume::Slot {
     std::once_flag once;
     std::unique_ptr<const LevelGrid> grid;
+    // The grid once built: every shadow query asks for its level, and call_once's own check
+    // (a pthread_once call) was 2.6 % of the bush field's middle view.
+    std::atomic<const LevelGrid*> ready{nullptr};
 };
 
 MarchVolume::MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGridLevel) : mTree(std::move(tree)) {
@@ -121,6 +125,7 @@ MarchVolume::~MarchVolume() = default;
 const LevelGrid* MarchVolume::grid(int level) const {
     if (level < 0 || level > mMaxGridLevel) return nullptr;
     Slot& slot = mSlots[std::size_t(level)];
+    if (const LevelGrid* grid = slot.ready.load(std::memory_order_acquire)) return grid;
     std::call_once(slot.once, [&] {
         mTree->loadLevels(std::uint32_t(level));  // a tree opened with openVto reads the level now
         auto grid = std::make_unique<LevelGrid>();
@@ -148,6 +153,7 @@ const LevelGrid* MarchVolume::grid(int level) const {
                     grid->cells[LevelGrid::morton(x, y, z)] = index[i] ? index[i] : LevelGrid::kEmpty | d;
                 }
         slot.grid = std::move(grid);
+        slot.ready.store(slot.grid.get(), std::memory_order_release);
     });
     return slot.grid.get();
 }

@@ -34,6 +34,7 @@ ApproximationBudget ApproximationBudget::exact() {
     b.shareShadowRays = false;
     b.shadowCacheResolution = 0;
     b.chainLatticeNodes = false;
+    b.nearShadowTable = false;
     b.blendCutoff = 0;
     b.reflectanceReuseWeight = 0;
     b.exactFloorShadowAbove = 0;
@@ -47,7 +48,7 @@ std::string ApproximationBudget::key() const {
     std::ostringstream k;
     k.precision(17);
     k << "share_shadow_rays " << shareShadowRays << " shadow_cache_resolution " << shadowCacheResolution
-      << " chain_lattice_nodes " << chainLatticeNodes << " blend_cutoff "
+      << " chain_lattice_nodes " << chainLatticeNodes << " near_shadow_table " << nearShadowTable << " blend_cutoff "
       << blendCutoff << " reflectance_reuse_weight " << reflectanceReuseWeight << " exact_floor_shadow_above "
       << exactFloorShadowAbove << " shadow_refresh " << shadowRefresh;
     return k.str();
@@ -270,15 +271,19 @@ private:
     SpanMarcher mMarcher{mScene, mOptions, mShadows, mConeSpread};
 };
 
-// The shadow lattices' cap (light_cache.h) where a texel can meet a directional light: blocks are
-// allocated as cells are first queried, so the cap, not the use, is what is known before the
-// render.
+// The shadow lattices' cap (light_cache.h) and the near tables' (near_shadow_table.h) where a
+// texel can meet a directional light: both are allocated as cells are first queried, so the cap,
+// not the use, is what is known before the render.
 std::uint64_t latticeMemoryCap(const Scene& scene, const RenderOptions& options) {
     if (options.approximations.shadowCacheResolution <= 0) return 0;
     const bool directional = std::any_of(scene.lights.begin(), scene.lights.end(),
                                          [](const Light& l) { return l.type == LightType::Directional; });
     const bool textured = !usedTexels(scene).empty();
-    return directional && textured ? std::uint64_t(detail::LightTransmittanceCache::kMaxNodes) * sizeof(float) : 0;
+    if (!directional || !textured) return 0;
+    const auto lights = std::uint64_t(std::count_if(scene.lights.begin(), scene.lights.end(),
+                                                    [](const Light& l) { return l.type == LightType::Directional; }));
+    const std::uint64_t tables = options.approximations.nearShadowTable ? lights * detail::NearShadowTable::kBytesPerLight : 0;
+    return std::uint64_t(detail::LightTransmittanceCache::kMaxNodes) * sizeof(float) + tables;
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "cell_adjacency.h"
 #include "frame.h"
 #include "light_cache.h"
+#include "near_shadow_table.h"
 #include "texel_runtime.h"
 #include "tracer.h"
 
@@ -89,11 +90,34 @@ public:
             lr /= len;
         }
         const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim, r)));
-        const CellMarch near = marchInCell(texel, prim, r, lr,
-                                           kExactLatticeSteps / double(mLightCache.grid(primIndex).nw), level);
-        counters.voxels += near.blocks;
-        if (near.exitFace == 0 || near.transmittance <= kTransmittanceCutoff) return 0;
-        return near.transmittance * cachedShadow(slot, primIndex, near.end, l, 0, &prim);
+        const double maxStep = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
+        const CellSegment near = segmentInCell(prim, r, lr, maxStep);
+        if (near.exitFace == 0) return 0;  // the base surface blocks
+        double transmittance;
+        const LevelGrid* grid = nullptr;
+        if (const int table = nearTableSlot(slot, primIndex, texel, lr, level, grid); table >= 0) {
+            transmittance = mNearTable.transmittance(table, *texel.volume, *grid, texel.tauAt(level), level, near.p0,
+                                                     near.step, maxStep);
+        } else {
+            const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), near.p0,
+                                                                near.p0 + near.step * lr, level, kTransmittanceCutoff);
+            counters.voxels += seg.blocks;
+            transmittance = seg.transmittance;
+        }
+        if (transmittance <= kTransmittanceCutoff) return 0;
+        return transmittance * cachedShadow(slot, primIndex, near.end, l, 0, &prim);
+    }
+
+    // The near table's slot for a query from primitive `primIndex` toward lattice slot `slot`
+    // along reference direction lr at `level`, −1 when the query marches (NearShadowTable).
+    // `grid`: the level's grid, when there is a slot.
+    int nearTableSlot(int slot, int primIndex, const TexelRuntime& texel, const Vec3& lr, int level,
+                      const LevelGrid*& grid) const {
+        if (mNearSlots.empty() || level > NearShadowTable::kMaxLevel) return -1;
+        const int table = mNearSlots[std::size_t(primIndex) * mLightCache.lights() + std::size_t(slot)];
+        if (table < 0 || !NearShadowTable::same(mNearTable.slot(table).lr, lr)) return -1;
+        grid = texel.volume->grid(level);
+        return grid ? table : -1;
     }
 
     // The lattice's value at cell coordinates r of primitive `primIndex`. Node values are shared
@@ -209,7 +233,22 @@ public:
     };
     CellMarch marchInCell(const TexelRuntime& texel, const Prim& prim, const Vec3& r, const Vec3& lr, double maxStep,
                           int level) const {
-        CellMarch m;
+        const CellSegment segment = segmentInCell(prim, r, lr, maxStep);
+        const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), segment.p0,
+                                                            segment.p0 + segment.step * lr, level, kTransmittanceCutoff);
+        return {seg.transmittance, segment.end, segment.exitFace, seg.blocks};
+    }
+
+    // The straight segment marchInCell marches: from p0 (tiled reference space, the point r)
+    // `step` along lr, ending at `end` (cell coordinates) on face exitFace (−1: inside).
+    struct CellSegment {
+        Vec3 p0;
+        double step;
+        int exitFace = -1;
+        Vec3 end;
+    };
+    static CellSegment segmentInCell(const Prim& prim, const Vec3& r, const Vec3& lr, double maxStep) {
+        CellSegment m;
         double step = maxStep;
         const Vec3 p0 = tile(r, prim);
         const Vec3 lc = prim.map.linearInverse() * lr;
@@ -230,11 +269,9 @@ public:
             step = std::max(0.0, -p0.z() / lr.z());
             m.exitFace = 0;  // the base surface, which blocks
         }
-        const Vec3 p1 = p0 + step * lr;
-        const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level, kTransmittanceCutoff);
-        m.transmittance = seg.transmittance;
-        m.blocks = seg.blocks;
-        m.end = prim.map.toCell(p1);
+        m.p0 = p0;
+        m.step = step;
+        m.end = prim.map.toCell(p0 + step * lr);
         // The face it stopped on exactly, not a rounding away from it: the neighbour's lattice is
         // looked up there.
         if (m.exitFace >= 2) m.end[(m.exitFace - 2) / 2] = double(m.exitFace % 2);
@@ -243,6 +280,28 @@ public:
 
 private:
     static constexpr int kMaxChain = 256;
+    // The near tables' slots, fixed before any pixel (in primitive order, so that which cells
+    // have one does not depend on the tiles'): cells with a lattice that show one tile of their
+    // texel, by texel and reference-space light direction at the cell's centre.
+    std::vector<int> makeNearSlots() {
+        if (mLightCache.empty() || !mOptions.approximations.nearShadowTable) return {};
+        const std::size_t lights = mLightCache.lights();
+        std::vector<int> slots(mTracer.prims().size() * lights, -1);
+        for (std::size_t i = 0; i < mTracer.prims().size(); ++i) {
+            if (!mTracer.prims().textured(i) || mLightCache.grid(int(i)).nw <= 0) continue;
+            const Prim prim = mTracer.prims()[i];
+            if (!NearShadowTable::showsOneTile(prim.map)) continue;
+            const Mat3 inverse = tiledJacobian(prim, Vec3::Constant(0.5)).inverse();
+            for (std::size_t k = 0; k < lights; ++k) {
+                const Vec3 lr = inverse * mLightCache.direction(int(k));
+                const double len = lr.norm();
+                if (!(len > 0) || !std::isfinite(len)) continue;
+                slots[i * lights + k] = mNearTable.slotFor(mSurfaces[std::size_t(prim.surface)].texel, int(k), lr / len);
+            }
+        }
+        return slots;
+    }
+
     LightTransmittanceCache makeLightCache() const {
         const int n = std::min(mOptions.approximations.shadowCacheResolution, 256);
         if (n <= 0) return {};
@@ -278,6 +337,9 @@ private:
     const std::vector<TexelRuntime>& mTexels;
     LightTransmittanceCache mLightCache = makeLightCache();
     CellAdjacency mAdjacency = mLightCache.empty() ? CellAdjacency() : CellAdjacency(mTracer.prims());
+    NearShadowTable mNearTable;
+    // Per primitive and lattice slot, the near table's slot (−1: march); empty: no tables.
+    std::vector<int> mNearSlots = makeNearSlots();
     mutable std::atomic<bool> mChainCut{false};
 };
 

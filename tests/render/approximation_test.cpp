@@ -21,12 +21,13 @@ TEST(Approximations, ExactTurnsEveryOneOffAndTheKeyNamesEveryValue) {
     EXPECT_FALSE(exact.shareShadowRays);
     EXPECT_EQ(exact.shadowCacheResolution, 0);
     EXPECT_FALSE(exact.chainLatticeNodes);
+    EXPECT_FALSE(exact.nearShadowTable);
     EXPECT_EQ(exact.blendCutoff, 0.0);
     EXPECT_EQ(exact.reflectanceReuseWeight, 0.0);
     EXPECT_EQ(exact.exactFloorShadowAbove, 0.0);
     EXPECT_EQ(exact.shadowRefresh, 1.0);
     // Changing any one value changes the key (the pipeline's cache key is made from it).
-    std::vector<ApproximationBudget> variants(7);
+    std::vector<ApproximationBudget> variants(8);
     variants[0].shareShadowRays = false;
     variants[1].shadowCacheResolution = 16;
     variants[2].blendCutoff = 0.2;
@@ -34,6 +35,7 @@ TEST(Approximations, ExactTurnsEveryOneOffAndTheKeyNamesEveryValue) {
     variants[4].exactFloorShadowAbove = 0.1;
     variants[5].shadowRefresh = 0.5;
     variants[6].chainLatticeNodes = false;
+    variants[7].nearShadowTable = false;
     for (const auto& v : variants) EXPECT_NE(v.key(), ApproximationBudget{}.key());
 }
 

@@ -1,0 +1,237 @@
+// The first stretch of a shadow query toward a directional light, from a table per voxel instead
+// of a march per query (docs/render.md, "Shadows"; issue 12's "a per-light volume in reference
+// space shared by all cells").
+//
+// A shadow query inside a texel cell marches the first kExactLatticeSteps lattice steps toward
+// the light exactly (ShadowQueries::nearAndCachedShadow), about half a tile: on the bush field's
+// middle view those marches were a fifth of the render, and most of them crossed the same voxels
+// as the query of the neighbouring pixel. For a cell that shows exactly one tile of its texel
+// (the cell's sides are the tile's), with a constant Jacobian (so one reference-space light
+// direction for the whole cell), what such a march meets depends only on where it starts in the
+// tile. The table holds, per voxel of the shadow level, the optical depth of that march *beyond
+// the voxel*, from the voxel's centre: a query takes its own voxel's share exactly (from where it
+// stands) and the rest from the table. The approximation is the rest of the march moved by at
+// most half a voxel of the shadow level sideways; its bound is the test
+// NearShadowTableMatchesTheNearMarch and, on the bush field, the image mean.
+//
+// Cells share a table when they share the texel and the reference-space light direction (a flat
+// field's cells all do); each light has its own tables, at most kMaxSlotsPerLight directions of
+// it (the first cells', in primitive order), so that what one light's shadows are does not depend
+// on the other lights. Values are computed on first use, each a function of its voxel alone, so
+// whichever thread writes one writes the same value: images do not depend on the tiles' order.
+// Levels up to kMaxLevel (32³ voxels, 2 MiB a table); finer queries march.
+#pragma once
+
+#include <vtex/render/texel_march.h>
+
+#include "frame.h"
+#include "march.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace vtex::render::detail {
+
+class NearShadowTable {
+public:
+    static constexpr int kMaxLevel = 5;
+    /// Distinct (texel, direction) pairs one light keeps tables for; cells beyond march.
+    static constexpr int kMaxSlotsPerLight = 4;
+    /// A query's reference-space light direction is the table's when within this (per component).
+    static constexpr double kSameDirection = 1e-9;
+    /// Per face: the end's extinction, the four quarters' transmittances; three faces a voxel.
+    static constexpr int kPerFace = 5, kPerVoxel = 3 * kPerFace;
+
+    /// The slot's texel and light direction; tables are allocated per level on first use.
+    struct Slot {
+        int texel = -1;
+        int light = -1;  ///< LightTransmittanceCache slot
+        Vec3 lr = Vec3::Zero();
+        Vec3 inverse = Vec3::Zero();  ///< 1 / lr, per component (∞ for 0)
+        std::array<std::atomic<std::atomic<float>*>, kMaxLevel + 1> levels{};
+    };
+
+    NearShadowTable() = default;
+    ~NearShadowTable() {
+        for (auto& s : mSlots)
+            for (auto& l : s->levels) delete[] l.load();
+    }
+    NearShadowTable(const NearShadowTable&) = delete;
+    NearShadowTable& operator=(const NearShadowTable&) = delete;
+
+    /// Whether a cell with map `map` shows exactly one whole tile (its sides are the tile's).
+    static bool showsOneTile(const CellMap& map) {
+        Eigen::Vector2d lo, hi;
+        map.bounds(lo, hi);
+        return (hi - lo).isApprox(Eigen::Vector2d(1, 1), 1e-12) && lo.x() == std::round(lo.x()) &&
+               lo.y() == std::round(lo.y());
+    }
+
+    /// The memory a light's tables may take at most.
+    static constexpr std::uint64_t kBytesPerLight = [] {
+        std::uint64_t voxels = 0;
+        for (int l = 0; l <= kMaxLevel; ++l) voxels += std::uint64_t(1) << (3 * l);
+        return std::uint64_t(kMaxSlotsPerLight) * voxels * kPerVoxel * sizeof(float);
+    }();
+
+    /// The slot of (texel, light, lr), made if need be: −1 when the light has kMaxSlotsPerLight.
+    /// Called before rendering, in primitive order, so that which cells have a table is fixed.
+    int slotFor(int texel, int light, const Vec3& lr) {
+        int ofLight = 0;
+        for (std::size_t i = 0; i < mSlots.size(); ++i) {
+            if (mSlots[i]->light != light) continue;
+            if (mSlots[i]->texel == texel && same(mSlots[i]->lr, lr)) return int(i);
+            ++ofLight;
+        }
+        if (ofLight >= kMaxSlotsPerLight) return -1;
+        auto s = std::make_unique<Slot>();
+        s->texel = texel;
+        s->light = light;
+        s->lr = lr;
+        s->inverse = lr.cwiseInverse();
+        for (auto& l : s->levels) l.store(nullptr);
+        mSlots.push_back(std::move(s));
+        return int(mSlots.size()) - 1;
+    }
+
+    const Slot& slot(int i) const { return *mSlots[std::size_t(i)]; }
+    static bool same(const Vec3& a, const Vec3& b) { return (a - b).cwiseAbs().maxCoeff() <= kSameDirection; }
+
+    /// Transmittance of the segment p0 → p0 + step·lr (tiled reference space, within one tile
+    /// of a cell that shows one tile) through `volume` at `level` (≤ kMaxLevel; `grid` its
+    /// grid), `maxStep` the longest such segment: the segment's share in the voxel it starts in
+    /// exactly, up to the face it leaves by; the rest from that face's entry of the table.
+    double transmittance(int slotIndex, const MarchVolume& volume, const LevelGrid& grid, double tau, int level,
+                         const Vec3& p0, double step, double maxStep) const {
+        const Slot& s = slot(slotIndex);
+        const double n = double(grid.n), invN = 1 / n;
+        // Located a hair along the ray, as the march locates a point on a voxel face.
+        const Vec3 p = p0 + (1e-7 * invN) * s.lr;
+        double f[3];
+        double exit = std::numeric_limits<double>::infinity();
+        int face = -1;
+        for (int a = 0; a < 3; ++a) {
+            f[a] = std::clamp(std::floor(p[a] * n), -4e15, 4e15);
+            if (s.lr[a] == 0) continue;
+            const double e = ((s.lr[a] > 0 ? f[a] + 1 : f[a]) * invN - p0[a]) * s.inverse[a];
+            if (e < exit) {
+                exit = e;
+                face = a;
+            }
+        }
+        const std::uint32_t mask = grid.n - 1;
+        const std::uint32_t idx[3] = {std::uint32_t(std::int64_t(f[0]) & mask), std::uint32_t(std::int64_t(f[1]) & mask),
+                                      std::uint32_t(std::clamp(f[2], 0.0, n - 1))};
+        exit = std::clamp(exit, 0.0, step);
+        const std::uint32_t cell = grid.cell(idx[0], idx[1], idx[2]);
+        const double own = cell & LevelGrid::kEmpty ? 0.0 : sigma(grid.voxels[cell], tau, s.lr) * exit;
+        if (!(step > exit) || face < 0) return std::exp(-own);
+        // The rest from where on the face the query leaves (fractions of the voxel along the
+        // face's other two axes).
+        const int u = (face + 1) % 3, v = (face + 2) % 3;
+        const double fu = (p0[u] + exit * s.lr[u]) * n - f[u], fv = (p0[v] + exit * s.lr[v]) * n - f[v];
+        return std::exp(-own) * rest(s, volume, grid, tau, level, idx, face, step - exit, maxStep, fu, fv);
+    }
+
+private:
+    static double sigma(const GridVoxel& v, double tau, const Vec3& lr) {
+        return tau * double(v.density) * v.s.projectedArea(lr);
+    }
+
+    // The transmittance over `length` from (fu, fv) on the face of voxel idx (in the tile
+    // [0, 1]²) that is perpendicular to axis `face` and toward the light. The entry holds the
+    // transmittances of the marches from the face's four quarters (at 1/4 and 3/4 of the voxel)
+    // up to maxStep or the tile's sides, top or floor: interpolated bilinearly (extended to the
+    // face's edges), which keeps where on the face the query leaves — the camera's queries sit
+    // on its side of a voxel, where its ray came through, and their light paths share that
+    // emptier side (on the bush field's middle view the face's mean alone made the stretch 2 %
+    // too dark, the voxel's centre 6 % too bright). Where the tile's sides or top end both the
+    // query and the entries, their lengths agree; where maxStep does, the query's is shorter by
+    // its share in its own voxel (at most a voxel's chord), taken off at the extinction where the
+    // face's middle march ends.
+    double rest(const Slot& s, const MarchVolume& volume, const LevelGrid& grid, double tau, int level,
+                const std::uint32_t idx[3], int face, double length, double maxStep, double fu, double fv) const {
+        const double invN = 1 / double(grid.n);
+        const int u = (face + 1) % 3, v = (face + 2) % 3;
+        Vec3 from(idx[0] + 0.5, idx[1] + 0.5, idx[2] + 0.5);
+        from *= invN;
+        from[face] += (s.lr[face] > 0 ? 0.5 : -0.5) * invN;
+        std::atomic<float>* values =
+            table(s, level) + kPerVoxel * ((std::size_t(idx[2]) * grid.n + idx[1]) * grid.n + idx[0]) + kPerFace * face;
+        if (std::isnan(values[1].load(std::memory_order_acquire))) fill(s, volume, grid, tau, level, from, face, maxStep, values);
+        const double wu = std::clamp(fu, 0.0, 1.0) * 2 - 0.5, wv = std::clamp(fv, 0.0, 1.0) * 2 - 0.5;
+        double t = 0;
+        for (int k = 0; k < 4; ++k)
+            t += ((k & 1) ? wu : 1 - wu) * ((k & 2) ? wv : 1 - wv) * double(values[1 + k].load(std::memory_order_relaxed));
+        // The entries' lengths, where the query leaves: the distance to the tile's sides, top or
+        // floor along the light is affine in the start, so bilinear interpolation of the quarters'
+        // lengths is that distance at the exit point itself, capped at maxStep.
+        from[u] += (fu - 0.5) * invN;
+        from[v] += (fv - 0.5) * invN;
+        const double entryLength = std::min(maxStep, tileExit(s, from));
+        const double endSigma = double(values[0].load(std::memory_order_relaxed));
+        return std::clamp(t * std::exp(-endSigma * (length - entryLength)), 0.0, 1.0);
+    }
+
+    // The distance from x (in the tile [0, 1]²) along the slot's direction to the tile's sides,
+    // top or floor.
+    static double tileExit(const Slot& s, const Vec3& x) {
+        double d = std::numeric_limits<double>::infinity();
+        for (int a = 0; a < 3; ++a)
+            if (s.lr[a] != 0) d = std::min(d, std::max(0.0, ((s.lr[a] > 0 ? 1.0 : 0.0) - x[a]) * s.inverse[a]));
+        return d;
+    }
+
+    // An entry: the extinction where the face's march ends, then the transmittance of the march
+    // from each quarter of the face (the first stored last, with release: the entry is made).
+    void fill(const Slot& s, const MarchVolume& volume, const LevelGrid& grid, double tau, int level, const Vec3& from,
+              int face, double maxStep, std::atomic<float>* values) const {
+        const double n = double(grid.n);
+        const int u = (face + 1) % 3, v = (face + 2) % 3;
+        double t[4] = {1, 1, 1, 1};
+        double endSigma = 0;
+        const double length = std::min(maxStep, tileExit(s, from));
+        if (length > 0) {
+            for (int k = 0; k < 4; ++k) {
+                Vec3 start = from;
+                start[u] += ((k & 1) ? 0.25 : -0.25) / n;
+                start[v] += ((k & 2) ? 0.25 : -0.25) / n;
+                const double quarter = std::min(maxStep, tileExit(s, start));
+                t[k] = marchTransmittance(volume, tau, start, start + quarter * s.lr, level, kCutoff).transmittance;
+            }
+            const Vec3 end = from + (length - 1e-7 / n) * s.lr;
+            const std::uint32_t mask = grid.n - 1;
+            const std::uint32_t cell = grid.cell(std::uint32_t(std::int64_t(std::floor(end.x() * n)) & mask),
+                                                 std::uint32_t(std::int64_t(std::floor(end.y() * n)) & mask),
+                                                 std::uint32_t(std::clamp(std::floor(end.z() * n), 0.0, n - 1)));
+            if (!(cell & LevelGrid::kEmpty)) endSigma = sigma(grid.voxels[cell], tau, s.lr);
+        }
+        values[0].store(float(endSigma), std::memory_order_relaxed);
+        for (int k = 3; k >= 1; --k) values[1 + k].store(float(t[k]), std::memory_order_relaxed);
+        values[1].store(float(t[0]), std::memory_order_release);
+    }
+
+    std::atomic<float>* table(const Slot& s, int level) const {
+        auto& entry = const_cast<Slot&>(s).levels[std::size_t(level)];
+        std::atomic<float>* values = entry.load(std::memory_order_acquire);
+        if (values) return values;
+        const std::size_t count = std::size_t(kPerVoxel) << (3 * level);
+        auto* fresh = new std::atomic<float>[count];
+        for (std::size_t i = 0; i < count; ++i) fresh[i].store(std::numeric_limits<float>::quiet_NaN(), std::memory_order_relaxed);
+        if (entry.compare_exchange_strong(values, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) return fresh;
+        delete[] fresh;  // another thread was first
+        return values;
+    }
+
+    // A march darker than this is as dark (the queries' own cut-off is 1e-4).
+    static constexpr double kCutoff = 1e-6;
+    std::vector<std::unique_ptr<Slot>> mSlots;
+};
+
+}  // namespace vtex::render::detail
