@@ -251,7 +251,86 @@ std::optional<Vec3> TrilinearCell::inverse(const Vec3& x, const Vec3& guess, dou
     return std::nullopt;
 }
 
-int cellSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::array<CellSpan, 4>& spans) {
+namespace {
+
+// The cell's map when it is affine (every mixed term of the trilinear map exactly zero: a
+// parallelepiped, as a flat face under a shell along its constant normal makes), as its origin
+// corner and Jacobian; false otherwise.
+bool affineMap(const std::array<Vec3, 8>& c, Mat3& j) {
+    // X = c0 + u·a + v·b + w·e + uv·(c3 − c1 − c2 + c0) + uw·(…) + vw·(…) + uvw·(…)
+    const bool affine = (c[3] - c[1] - c[2] + c[0]).isZero(0) && (c[5] - c[1] - c[4] + c[0]).isZero(0) &&
+                        (c[6] - c[2] - c[4] + c[0]).isZero(0) && (c[7] - c[3] - c[5] + c[1]).isZero(0);
+    if (!affine) return false;
+    j.col(0) = c[1] - c[0];
+    j.col(1) = c[2] - c[0];
+    j.col(2) = c[4] - c[0];
+    return true;
+}
+
+// cellSpans for an affine cell: the slab test in cell coordinates, a twentieth of the six patch
+// tests' instructions (on the bush field's cells, 1 770 per cell). The same spans up to rounding:
+// entry and exit are where the ray crosses the planes u, v, w = 0, 1, the coordinate crossed set
+// exactly; a ray that only grazes the cell (an empty or one-point interval) has no span, as a
+// tangent crossing has none in the general test.
+int affineSpans(const Vec3& origin, const Mat3& j, const Vec3& o, const Vec3& d, std::array<CellSpan, 4>& spans) {
+    const double det = j.determinant();
+    if (!(det != 0) || !std::isfinite(det)) return 0;
+    const Mat3 inverse = j.inverse();
+    Vec3 ro = inverse * (o - origin);
+    const Vec3 rd = inverse * d;
+    // An origin on a face within rounding (a floor point's shadow ray starts on the floor) is on
+    // it: a ray from there into the cell starts inside it, as the patch tests find (their
+    // crossing at t = 0 is not past the origin); without this, the inverse's rounding put some
+    // floor points a hair below the floor, which then blocked their light.
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(ro[a]) < 1e-12) ro[a] = 0;
+        else if (std::abs(ro[a] - 1) < 1e-12) ro[a] = 1;
+    }
+    // Face numbering of TrilinearCell: 0/1 w = 0/1, 2/3 u = 0/1, 4/5 v = 0/1.
+    constexpr int kFaceOf[3] = {2, 4, 0};
+    double tIn = -std::numeric_limits<double>::infinity(), tOut = std::numeric_limits<double>::infinity();
+    int faceIn = -1, faceOut = -1;
+    for (int a = 0; a < 3; ++a) {
+        if (rd[a] == 0) {
+            if (!(ro[a] > 0 && ro[a] < 1)) return 0;  // parallel to and outside (or on) the slab
+            continue;
+        }
+        const double t0 = -ro[a] / rd[a], t1 = (1 - ro[a]) / rd[a];
+        const bool up = rd[a] > 0;
+        const double enter = up ? t0 : t1, leave = up ? t1 : t0;
+        if (enter > tIn) {
+            tIn = enter;
+            faceIn = kFaceOf[a] + (up ? 0 : 1);
+        }
+        if (leave < tOut) {
+            tOut = leave;
+            faceOut = kFaceOf[a] + (up ? 1 : 0);
+        }
+    }
+    // A ray from a point on the boundary leaving at once has the span [0, 0], as the patch tests
+    // find its exit a rounding error past 0.
+    if (!(tOut > tIn) || !(tOut >= 0)) return 0;
+    const auto at = [&](double t, int face) {
+        Vec3 r = (ro + t * rd).cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones());
+        const int axis = face < 2 ? 2 : face < 4 ? 0 : 1;
+        r[axis] = face % 2;
+        return r;
+    };
+    CellSpan s;
+    if (tIn > 0) {
+        s.tIn = tIn;
+        s.faceIn = faceIn;
+        s.rIn = at(tIn, faceIn);
+    }
+    s.tOut = tOut;
+    s.faceOut = faceOut;
+    s.rOut = at(tOut, faceOut);
+    spans[0] = s;
+    return 1;
+}
+
+// The crossings of the six faces' patch tests, sorted, paired into spans.
+int generalSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::array<CellSpan, 4>& spans) {
     struct Crossing {
         double t;
         int face;
@@ -326,6 +405,13 @@ int cellSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::arra
         // A second entry while inside is the same edge crossed on two faces: ignore it.
     }
     return count;
+}
+
+}  // namespace
+
+int cellSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::array<CellSpan, 4>& spans) {
+    if (Mat3 j; affineMap(cell.corners(), j)) return affineSpans(cell.corners()[0], j, o, d, spans);
+    return generalSpans(cell, o, d, spans);
 }
 
 }  // namespace vtex::render

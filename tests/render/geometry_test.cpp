@@ -291,3 +291,53 @@ TEST(Cell, InverseMapRefusesPointsOutside) {
     const auto off = flat.inverse(Vec3(0.5, 0.5, 0.5));
     EXPECT_FALSE(off);
 }
+
+// A cell whose trilinear map is affine (a parallelepiped: a flat parallelogram face under a shell
+// along one constant normal) takes the slab test instead of the six patch tests; it must give what
+// the patch tests give. The oracle: the same cell with one top corner moved by 1e-13 of its size,
+// which makes it trilinear and so takes the patch tests. Rays aimed in and around random
+// parallelepipeds (sheared, tilted, scaled), from outside and from inside.
+TEST(Cell, AffineCellsTakeTheSlabTestWithTheSameSpans) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> uniform(-1, 1), aim(-0.3, 1.3), scale(0.2, 3);
+    // Dyadic values, so that the corners' sums are exact and the mixed terms exactly zero.
+    const auto u = [&](std::mt19937& r) { return std::round(uniform(r) * 256) / 256; };
+    int compared = 0, hits = 0, exactlyAffine = 0;
+    for (int k = 0; k < 3000; ++k) {
+        const double s = std::round(scale(rng) * 16) / 16;
+        const Vec3 a = s * (Vec3(1, 0, 0) + 0.25 * Vec3(u(rng), u(rng), u(rng)));
+        const Vec3 b = s * (Vec3(0, 1, 0) + 0.25 * Vec3(u(rng), u(rng), u(rng)));
+        const Vec3 base = 4 * Vec3(u(rng), u(rng), u(rng));
+        const Vec3 normal = Vec3(0.375 * u(rng), 0.375 * u(rng), 1);
+        const double h = s * (0.25 + std::abs(u(rng)));
+        const std::array<Vec3, 4> p = {base, base + a, base + b, base + a + b};
+        const std::array<Vec3, 4> n = {normal, normal, normal, normal};
+        const TrilinearCell affine(p, n, h, k % 5 == 0);
+        const auto& c = affine.corners();
+        exactlyAffine += (c[3] - c[1] - c[2] + c[0]).isZero(0) && (c[5] - c[1] - c[4] + c[0]).isZero(0) &&
+                         (c[6] - c[2] - c[4] + c[0]).isZero(0) && (c[7] - c[3] - c[5] + c[1]).isZero(0);
+        std::array<Vec3, 4> q = p;
+        q[3] += 1e-13 * s * Vec3(1, 1, 1);
+        const TrilinearCell trilinear(q, n, h, k % 5 == 0);
+        const Vec3 target = affine.map(Vec3(aim(rng), aim(rng), aim(rng)));
+        const Vec3 o = k % 4 == 0 ? affine.map(Vec3(0.5, 0.5, 0.5)) : target + 4 * s * randomUnit(rng);
+        const Vec3 d = k % 4 == 0 ? randomUnit(rng) : Vec3((target - o).normalized());
+        std::array<CellSpan, 4> fast, slow;
+        const int nf = cellSpans(affine, o, d, fast), ns = cellSpans(trilinear, o, d, slow);
+        ASSERT_EQ(nf, ns) << k;
+        ++compared;
+        for (int i = 0; i < nf; ++i) {
+            const CellSpan &x = fast[std::size_t(i)], &y = slow[std::size_t(i)];
+            ++hits;
+            EXPECT_EQ(x.faceIn, y.faceIn) << k;
+            EXPECT_EQ(x.faceOut, y.faceOut) << k;
+            EXPECT_NEAR(x.tIn, y.tIn, 1e-9 * s) << k;
+            EXPECT_NEAR(x.tOut, y.tOut, 1e-9 * s) << k;
+            if (x.faceIn >= 0) EXPECT_LT((x.rIn - y.rIn).norm(), 1e-9) << k;
+            EXPECT_LT((x.rOut - y.rOut).norm(), 1e-9) << k;
+        }
+    }
+    EXPECT_EQ(compared, 3000);
+    EXPECT_GT(exactlyAffine, 2900);  // the slab test is what is tested
+    EXPECT_GT(hits, 1500);
+}
