@@ -22,6 +22,7 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 namespace vtex::octree {
@@ -261,75 +262,89 @@ struct OctreeBuilder::Impl {
         }
     }
 
+    // Whether `node` (level l, its children [b, e) at level l + 1) may stand for all its
+    // descendants within the tolerance; if so, the range of what they hold goes to `range`.
+    // `rangeOfChild(c)` is read only for children that may stand for theirs.
+    template <class RangeOfChild>
+    bool mayStandForDescendants(const PNode& node, std::uint32_t l, std::size_t b, std::size_t e,
+                                const std::vector<std::uint8_t>& childCollapsible, RangeOfChild rangeOfChild,
+                                Range& range) const {
+        const VoxelData& p = node.data;
+        if (node.flags & kSource) {
+            range = pointRange(p);
+            return true;
+        }
+        for (std::size_t c = b; c < e; ++c)
+            if (!childCollapsible[c]) return false;
+        if (!options.compress) return false;
+        const double eps = options.tolerance;
+        const Range self = pointRange(p);
+        const double selfTrace = double(self.smax[0]) + double(self.smax[1]) + double(self.smax[2]);
+        // Transmittance: standing for its descendants, the node changes the extinction anywhere
+        // in its voxel by at most Δρ·Â, Â ≤ √(tr S) for every descendant's and its own
+        // normalised S, so the transmittance along any chord of its voxel (length ≤ √3·h) by at
+        // most Δρ·√(tr S_max)·√3·h (|e^−a − e^−b| ≤ |a − b|), for τ = 1. A missing child is
+        // density 0: a node merges with empty space when its own optical depth across itself is
+        // within ε.
+        const auto transmittanceChange = [&](double dRho, double trace) {
+            return dRho * std::sqrt(trace) * std::sqrt(3.0) * std::ldexp(1.0, -int(l));
+        };
+        // With a child missing, Δρ ≥ ρ and tr S_max ≥ its own: this lower bound of the change
+        // (the same expression, rounded the same way on smaller operands) already refuses most
+        // surface nodes, before any child's range is read (unpacking S is the cost here).
+        if (e - b < 8 && transmittanceChange(double(p.density), std::max(0.0, selfTrace)) > eps) return false;
+        Range r = rangeOfChild(b);
+        if (e - b < 8) r.dmin = 0;  // missing children are empty
+        for (std::size_t c = b; c < e; ++c) {
+            const Range cr = rangeOfChild(c);
+            r.dmin = std::min(r.dmin, cr.dmin);
+            r.dmax = std::max(r.dmax, cr.dmax);
+            for (int k = 0; k < 6; ++k) {
+                r.smin[k] = std::min(r.smin[k], cr.smin[k]);
+                r.smax[k] = std::max(r.smax[k], cr.smax[k]);
+            }
+            for (int k = 0; k < 3; ++k) {
+                r.amin[k] = std::min(r.amin[k], cr.amin[k]);
+                r.amax[k] = std::max(r.amax[k], cr.amax[k]);
+            }
+        }
+        const double dRho = std::max(double(p.density) - double(r.dmin), double(r.dmax) - double(p.density));
+        const double childTrace = double(r.smax[0]) + double(r.smax[1]) + double(r.smax[2]);
+        if (!(transmittanceChange(dRho, std::max({0.0, childTrace, selfTrace})) <= eps)) return false;
+        for (int k = 0; k < 6; ++k)
+            if (!(double(self.smin[k]) - double(r.smin[k]) <= eps && double(r.smax[k]) - double(self.smin[k]) <= eps))
+                return false;
+        for (int k = 0; k < 3; ++k)
+            if (!(double(p.albedo[k]) - double(r.amin[k]) <= eps && double(r.amax[k]) - double(p.albedo[k]) <= eps))
+                return false;
+        range = r;
+        return true;
+    }
+
     // Bottom-up: which pyramid nodes may stand for all their descendants within the tolerance.
     // Ranges of the finest level are not stored (they are points, read from each node's data):
-    // at 1024³ that level alone would take 80 bytes per voxel.
+    // at 1024³ that level alone would take 80 bytes per voxel. A level's ranges are written only
+    // for its collapsible nodes, the only ones a parent reads, into storage left uninitialised,
+    // so the pages of the others are never touched.
     std::vector<std::vector<std::uint8_t>> collapsibleNodes(const std::vector<std::vector<std::uint32_t>>& starts,
                                                             Progress& progress) const {
         const std::uint32_t L = this->L();
-        const double eps = options.tolerance;
         std::vector<std::vector<std::uint8_t>> collapsible(L + 1);
         collapsible[L].assign(levels[L].size(), 1);
-        std::vector<Range> below, current;
+        std::unique_ptr<Range[]> below, current;
         for (std::uint32_t l = L; l-- > 0;) {
             const Level& level = levels[l];
             const auto rangeOfChild = [&](std::size_t c) {
                 return l + 1 == L ? pointRange(levels[L][c].data) : below[c];
             };
             collapsible[l].assign(level.size(), 0);
-            current.assign(level.size(), Range{});
+            current.reset(new Range[level.size()]);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, level.size(), 1024),
                               [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                const PNode& node = level[i];
-                const VoxelData& p = node.data;
-                current[i] = pointRange(p);
-                const Range self = current[i];
-                if (node.flags & kSource) {
-                    collapsible[l][i] = 1;
-                    continue;
-                }
-                const std::size_t b = starts[l][i], e = starts[l][i + 1];
-                bool ok = true;
-                Range r = rangeOfChild(b);
-                if (e - b < 8) r.dmin = 0;  // missing children are empty
-                for (std::size_t c = b; c < e && ok; ++c) {
-                    ok = collapsible[l + 1][c] != 0;
-                    const Range cr = rangeOfChild(c);
-                    r.dmin = std::min(r.dmin, cr.dmin);
-                    r.dmax = std::max(r.dmax, cr.dmax);
-                    for (int k = 0; k < 6; ++k) {
-                        r.smin[k] = std::min(r.smin[k], cr.smin[k]);
-                        r.smax[k] = std::max(r.smax[k], cr.smax[k]);
-                    }
-                    for (int k = 0; k < 3; ++k) {
-                        r.amin[k] = std::min(r.amin[k], cr.amin[k]);
-                        r.amax[k] = std::max(r.amax[k], cr.amax[k]);
-                    }
-                }
-                if (!ok || !options.compress) continue;
-                // Transmittance: standing for its descendants, the node changes the extinction
-                // anywhere in its voxel by at most Δρ·Â, Â ≤ √(tr S) for every descendant's and
-                // its own normalised S, so the transmittance along any chord of its voxel
-                // (length ≤ √3·h) by at most Δρ·√(tr S_max)·√3·h (|e^−a − e^−b| ≤ |a − b|), for
-                // τ = 1. A missing child is density 0: a node merges with empty space when its own
-                // optical depth across itself is within ε.
-                const double dRho = std::max(double(p.density) - double(r.dmin), double(r.dmax) - double(p.density));
-                const double areaBound = std::sqrt(std::max({0.0, double(r.smax[0]) + double(r.smax[1]) + double(r.smax[2]),
-                                                             double(self.smax[0]) + double(self.smax[1]) + double(self.smax[2])}));
-                ok = dRho * areaBound * std::sqrt(3.0) * std::ldexp(1.0, -int(l)) <= eps;
-                for (int k = 0; k < 6 && ok; ++k)
-                    ok = double(self.smin[k]) - double(r.smin[k]) <= eps &&
-                         double(r.smax[k]) - double(self.smin[k]) <= eps;
-                for (int k = 0; k < 3 && ok; ++k)
-                    ok = double(p.albedo[k]) - double(r.amin[k]) <= eps &&
-                         double(r.amax[k]) - double(p.albedo[k]) <= eps;
-                if (ok) {
-                    collapsible[l][i] = 1;
-                    current[i] = r;
-                }
-            }
-            });
+                                  for (std::size_t i = range.begin(); i != range.end(); ++i)
+                                      collapsible[l][i] = mayStandForDescendants(level[i], l, starts[l][i], starts[l][i + 1],
+                                                                                 collapsible[l + 1], rangeOfChild, current[i]);
+                              });
             std::swap(below, current);
             progress.advance(1);
         }
