@@ -211,7 +211,7 @@ const TableEntry& requireEntry(const std::vector<TableEntry>& entries, std::stri
 
 std::shared_ptr<const Octree> openVto(const std::filesystem::path& file) {
     using namespace detail;
-    checkInputFile(file, std::uint64_t(1) << 40, "file");  // the same refusals as readVto's
+    checkInputFile(file, kMaxFileBytes, "file");  // the same refusals as readVto's
     // Closes the descriptor unless the loader has taken it.
     struct Descriptor {
         int fd;
