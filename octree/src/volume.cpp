@@ -93,8 +93,9 @@ VoxelData readVoxelData(ByteReader& r) {
 // Validates one stored voxel's values, not only its checksum (issue 14, item 8): finite,
 // non-negative density; for a non-empty voxel a unit quaternion (to 1e-3: the format stores it
 // normalised in float), σ non-negative and not all zero (S would vanish), and an albedo in
-// [0, 1] (a glTF base colour is, and filtering averages it). Returns a problem or empty.
-std::string checkVoxelData(const VoxelData& d, bool allowEmpty) {
+// [0, 1] (a glTF base colour is, and filtering averages it). Returns a problem or empty (a
+// literal: no string is built for each of a file's millions of valid voxels).
+std::string_view checkVoxelData(const VoxelData& d, bool allowEmpty) {
     if (!allFinite(d)) return "non-finite value";
     if (d.density < 0) return "negative density";
     if (!allowEmpty && d.density == 0) return "empty voxel stored";
@@ -203,7 +204,7 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
     volume.blocks.reserve(count);
     for (std::uint64_t i = 0; i < count; ++i) volume.blocks.push_back(decodeBlock(records + kBlockRecordSize * i));
     // A block's problem, or empty; blocks i − 1 and i must not overlap (keys strictly in order).
-    const auto problemAt = [&](std::uint64_t i) -> std::string {
+    const auto problemAt = [&](std::uint64_t i) -> std::string_view {
         const VolumeBlock& b = volume.blocks[i];
         if (b.level > L) return "level deeper than the resolution";
         if (b.flags > kBlockSolid) return "unknown block flags";
@@ -228,7 +229,7 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
             }
     });
     if (firstBad < count)
-        throw InputError(file, problemAt(firstBad), where + ", block " + std::to_string(firstBad.load()));
+        throw InputError(file, std::string(problemAt(firstBad)), where + ", block " + std::to_string(firstBad.load()));
     return volume;
 }
 
