@@ -114,10 +114,10 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, F
     else packIsotropic(p);
 }
 
-// The filter error of one parent (filterError: its NDF against the mixture of its children's),
-// with the children rebuilt as Ellipsoids; for the sampled nodes only.
-double measureFilterError(const PNode* children, std::size_t count, FilterRule rule, Filtered& f) {
-    filterChildren(children, count, rule, f);
+// The filter error of one parent whose filter `f` of its children filterChildren has just made
+// (filterError: its NDF against the mixture of its children's), with the children rebuilt as
+// Ellipsoids; for the sampled nodes only.
+double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f) {
     if (!f.result) return 0;
     std::vector<Ellipsoid> ellipsoids;
     std::vector<double> weights;
@@ -165,9 +165,12 @@ struct OctreeBuilder::Impl {
 
     std::uint32_t L() const { return volume.info.levels; }
 
-    // Filters the parents (keys passing `keep`) of level `childLevel`.
+    // Filters the parents (keys passing `keep`) of level `childLevel`. `measure`: these are all
+    // the filtered nodes of their level (a full build), so which of them measureFilterErrors
+    // samples is known now, and their filter errors are measured from the filter just made
+    // rather than from a second one later.
     template <class Keep>
-    Level filterParents(std::uint32_t childLevel, Keep keep, Progress& progress) {
+    Level filterParents(std::uint32_t childLevel, Keep keep, bool measure, Progress& progress) {
         const Level& children = levels[childLevel];
         const std::vector<std::size_t> starts = groupStarts(children, keep);
         Level parents(starts.size());
@@ -181,12 +184,15 @@ struct OctreeBuilder::Impl {
                                   const std::uint64_t parent = children[begin].key >> 3;
                                   while (end < children.size() && (children[end].key >> 3) == parent) ++end;
                                   filterChildren(&children[begin], end - begin, options.rule, f);
-                                  parents[g] = PNode{parent, f.data, std::numeric_limits<float>::quiet_NaN(), 0};
+                                  const bool sampled = measure && isSampled(parent, parentLevel, starts.size(),
+                                                                            options.filterErrorSamples);
+                                  const float error = sampled ? float(filterErrorOf(&children[begin], end - begin, f))
+                                                              : std::numeric_limits<float>::quiet_NaN();
+                                  parents[g] = PNode{parent, f.data, error, 0};
                               }
                               progress.advance(range.size());
                           });
         filtered += parents.size();
-        (void)parentLevel;
         return parents;
     }
 
@@ -215,7 +221,7 @@ struct OctreeBuilder::Impl {
         progress.start("filter", total + total / 7 + 1);
         levels[L()] = std::move(sources[L()]);
         for (std::uint32_t l = L(); l-- > 0;) {
-            Level parents = filterParents(l + 1, [](std::uint64_t) { return true; }, progress);
+            Level parents = filterParents(l + 1, [](std::uint64_t) { return true; }, true, progress);
             levels[l] = mergeSorted(std::move(parents), std::move(sources[l]));
         }
         progress.finish();
@@ -412,8 +418,8 @@ struct OctreeBuilder::Impl {
                                       PNode& node = level[selected[s]];
                                       if (!std::isnan(node.filterError)) continue;
                                       const std::size_t b = starts[l][selected[s]], e = starts[l][selected[s] + 1];
-                                      node.filterError =
-                                          float(measureFilterError(&levels[l + 1][b], e - b, options.rule, f));
+                                      filterChildren(&levels[l + 1][b], e - b, options.rule, f);
+                                      node.filterError = float(filterErrorOf(&levels[l + 1][b], e - b, f));
                                   }
                               });
             double sum = 0, max = 0;
@@ -561,7 +567,7 @@ void OctreeBuilder::updateRegion(const VoxelBox& region, std::vector<VolumeBlock
         Level fresh = std::move(sources[l]);
         if (l < L) {
             Level parents = m.filterParents(l + 1, [&](std::uint64_t parent) { return box.contains(parent); },
-                                            progress);
+                                            false, progress);
             // A source block at this level has no children below it, so no parent collides with it.
             fresh = Impl::mergeSorted(std::move(parents), std::move(fresh));
         }
