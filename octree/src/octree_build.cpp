@@ -24,6 +24,8 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
+#include <utility>
 
 namespace vtex::octree {
 namespace {
@@ -37,7 +39,30 @@ struct PNode {
     std::uint8_t flags;
 };
 
-using Level = std::vector<PNode>;
+// Leaves the nodes of a resized level uninitialised: each is written right after, from all
+// threads, and value-initialising them first was one more single-threaded pass over the level's
+// fresh pages (a pyramid level holds up to millions of nodes).
+template <class T>
+struct UninitialisedAllocator : std::allocator<T> {
+    UninitialisedAllocator() = default;
+    template <class U>
+    UninitialisedAllocator(const UninitialisedAllocator<U>&) noexcept {}
+    template <class U, class... Args>
+    void construct(U* p, Args&&... args) {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+    template <class U>
+    void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+        ::new (static_cast<void*>(p)) U;  // default-, not value-initialised
+    }
+};
+
+using Level = std::vector<PNode, UninitialisedAllocator<PNode>>;
+
+// The pyramid node of a block the volume gives: it has no children here.
+PNode sourceNode(const VolumeBlock& b) {
+    return PNode{b.key, b.data, std::numeric_limits<float>::quiet_NaN(), kSource};
+}
 
 using detail::mix64;
 
@@ -213,11 +238,20 @@ struct OctreeBuilder::Impl {
         // fresh pages cleared about twice over.
         std::vector<std::size_t> counts(L() + 1, 0);
         for (const auto& b : volume.blocks) ++counts[b.level];
-        for (std::uint32_t l = 0; l <= L(); ++l) sources[l].reserve(counts[l]);
-        for (const auto& b : volume.blocks)
-            sources[b.level].push_back(PNode{b.key, b.data, std::numeric_limits<float>::quiet_NaN(), kSource});
-        std::uint64_t total = 0;
-        for (const auto& b : volume.blocks) total += b.level == L() ? 1 : 0;
+        const auto& blocks = volume.blocks;
+        if (counts[L()] == blocks.size()) {
+            // Every block a finest voxel (any texel without a solid interior): copied from all threads.
+            sources[L()].resize(blocks.size());
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16384),
+                              [&](const tbb::blocked_range<std::size_t>& range) {
+                                  for (std::size_t i = range.begin(); i != range.end(); ++i)
+                                      sources[L()][i] = sourceNode(blocks[i]);
+                              });
+        } else {
+            for (std::uint32_t l = 0; l <= L(); ++l) sources[l].reserve(counts[l]);
+            for (const auto& b : blocks) sources[b.level].push_back(sourceNode(b));
+        }
+        const std::uint64_t total = counts[L()];
         progress.start("filter", total + total / 7 + 1);
         levels[L()] = std::move(sources[L()]);
         for (std::uint32_t l = L(); l-- > 0;) {
@@ -555,7 +589,7 @@ void OctreeBuilder::updateRegion(const VoxelBox& region, std::vector<VolumeBlock
     std::vector<Level> sources(L + 1);
     for (const auto& b : m.volume.blocks)
         if (!disjoint(extentOf(b.key, b.level), dirty))
-            sources[b.level].push_back(PNode{b.key, b.data, std::numeric_limits<float>::quiet_NaN(), kSource});
+            sources[b.level].push_back(sourceNode(b));
 
     progress.start("refilter", L + 1);
     for (std::uint32_t l = L + 1; l-- > 0;) {
