@@ -12,7 +12,7 @@
 // build of the same volume yields.
 #include <vtex/octree/octree.h>
 
-#include "hash.h"
+#include "pyramid.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -30,51 +30,7 @@
 namespace vtex::octree {
 namespace {
 
-constexpr std::uint8_t kSource = 1;  // a block given by the volume: it has no children here
-
-struct PNode {
-    std::uint64_t key;
-    VoxelData data;
-    float filterError;  // NaN: not measured yet
-    std::uint8_t flags;
-};
-
-// Leaves the nodes of a resized level uninitialised: each is written right after, from all
-// threads, and value-initialising them first was one more single-threaded pass over the level's
-// fresh pages (a pyramid level holds up to millions of nodes).
-template <class T>
-struct UninitialisedAllocator : std::allocator<T> {
-    UninitialisedAllocator() = default;
-    template <class U>
-    UninitialisedAllocator(const UninitialisedAllocator<U>&) noexcept {}
-    template <class U, class... Args>
-    void construct(U* p, Args&&... args) {
-        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-    }
-    template <class U>
-    void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
-        ::new (static_cast<void*>(p)) U;  // default-, not value-initialised
-    }
-};
-
-using Level = std::vector<PNode, UninitialisedAllocator<PNode>>;
-
-// The pyramid node of a block the volume gives: it has no children here.
-PNode sourceNode(const VolumeBlock& b) {
-    return PNode{b.key, b.data, std::numeric_limits<float>::quiet_NaN(), kSource};
-}
-
-using detail::mix64;
-
-// Whether the filter error of node `key` of `level` is measured, given that the level has
-// `count` filtered nodes: a hash-selected sample of about `samples` of them, independent of the
-// order in which nodes were built, so an update and a full build measure the same nodes.
-bool isSampled(std::uint64_t key, std::uint32_t level, std::uint64_t count, std::uint64_t samples) {
-    if (samples == 0 || count <= samples) return true;
-    const double fraction = double(samples) / double(count);
-    const std::uint64_t threshold = std::uint64_t(fraction * 18446744073709551615.0);
-    return mix64(key ^ (std::uint64_t(level) << 58)) < threshold;
-}
+using namespace detail;
 
 // A box of node indices at some level, half-open.
 struct LevelBox {
@@ -93,65 +49,6 @@ LevelBox boxAtLevel(const VoxelBox& box, std::uint32_t shift) {
         b.max[a] = box.max[a] > box.min[a] ? ((box.max[a] - 1) >> shift) + 1 : b.min[a];
     }
     return b;
-}
-
-struct Filtered {
-    VoxelData data;
-    std::vector<Mat3> forms;  // what the rule averages, per child with an ellipsoid
-    std::vector<double> weights;
-    std::optional<Ellipsoid> result;
-};
-
-// The design's filter for one parent from its (1 to 8) non-empty children. The children are
-// read through storedFilterForm, not rebuilt as Ellipsoids: this runs once per node of the
-// pyramid and was the build's cost (an eigensolver and elliptic integrals per child).
-void filterChildren(const PNode* children, std::size_t count, FilterRule rule, Filtered& out) {
-    out.forms.clear();
-    out.weights.clear();
-    out.result.reset();
-    // Eight identical children: the mean is the child itself, bit for bit (so that tolerance 0
-    // collapses exactly constant regions).
-    if (count == 8) {
-        bool same = true;
-        for (std::size_t i = 1; i < 8 && same; ++i) same = children[i].data == children[0].data;
-        if (same) {
-            out.data = children[0].data;
-            return;
-        }
-    }
-    double mass = 0;
-    double albedo[3] = {0, 0, 0};
-    for (std::size_t i = 0; i < count; ++i) {
-        const VoxelData& d = children[i].data;
-        const double w = d.density;
-        mass += w;
-        for (int c = 0; c < 3; ++c) albedo[c] += w * d.albedo[c];
-        if (auto form = storedFilterForm(d, rule)) {
-            out.forms.push_back(*form);
-            out.weights.push_back(w);
-        }
-    }
-    VoxelData& p = out.data;
-    p.density = float(mass / 8.0);
-    for (int c = 0; c < 3; ++c) p.albedo[c] = mass > 0 ? float(albedo[c] / mass) : 0.0f;
-    if (!out.forms.empty()) out.result = filterForms(out.forms, out.weights, rule);
-    if (out.result) packEllipsoid(*out.result, p);
-    else packIsotropic(p);
-}
-
-// The filter error of one parent whose filter `f` of its children filterChildren has just made
-// (filterError: its NDF against the mixture of its children's), with the children rebuilt as
-// Ellipsoids; for the sampled nodes only.
-double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f) {
-    if (!f.result) return 0;
-    std::vector<Ellipsoid> ellipsoids;
-    std::vector<double> weights;
-    for (std::size_t i = 0; i < count; ++i)
-        if (auto e = unpackEllipsoid(children[i].data)) {
-            ellipsoids.push_back(*e);
-            weights.push_back(children[i].data.density);
-        }
-    return filterError(*f.result, ellipsoids, weights);
 }
 
 // Indices where a new parent starts in a sorted child level, restricted to `keep(parentKey)`.
