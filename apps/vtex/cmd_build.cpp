@@ -16,8 +16,29 @@
 #include <iostream>
 #include <optional>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 namespace vtex::cli {
 namespace {
+
+// Keeps the memory the build frees for its next allocations instead of returning it to the
+// kernel. The build allocates and frees a series of arrays of millions of nodes (the file, the
+// volume, each pyramid level, the stored tree); glibc unmaps every freed block above its mmap
+// threshold and trims the heap's top, and the next array faults its pages in afresh. On this
+// project's VMs a page fault costs some 14 µs per 4 KiB page (the 2 MiB pages of
+// huge_pages.cpp cover only the aligned middle of each allocation): a 512³ bush build took
+// 10,800 faults and 0.21 s of system time, 3,400 and 0.12 s with its allocations served from
+// a heap that keeps what is freed (perf stat, medians of 5). Only the build asks for this: it is
+// short-lived, and its peak resident memory stays the same (239 → 241 MiB).
+void keepFreedMemory() {
+#if defined(__GLIBC__)
+    mallopt(M_MMAP_MAX, 0);                 // every block from the heap, so that a freed one is reused
+    mallopt(M_TRIM_THRESHOLD, 0x7fffffff);  // never give the heap's top back
+    mallopt(M_TOP_PAD, 64 << 20);           // grow the heap in large steps
+#endif
+}
 
 // Refuses an earlier octree that a full build of `volume` with `options` would not have made.
 void checkEarlierTree(const octree::Octree& old, const octree::SparseVolume& volume, const octree::BuildOptions& options,
@@ -109,6 +130,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     region->needs(update);
     return [flags](const GlobalOptions& global) {
         const ThreadLimit threadLimit(flags->threads);
+        keepFreedMemory();
         checkOutputPath(flags->output, {flags->input, flags->source, flags->update});  // before any work (atomic_file.h)
         checkMemoryEstimate(flags->input, "building its octree", octree::estimateBuildMemory(flags->input),
                             flags->maxMemory);

@@ -3,6 +3,7 @@
 
 #include <vtex/core/error.h>
 
+#include <algorithm>
 #include <fstream>
 
 namespace vtex {
@@ -21,13 +22,31 @@ std::uint64_t checkInputFile(const std::filesystem::path& file, std::uint64_t ma
     return size;
 }
 
-std::string readInputFile(const std::filesystem::path& file, std::uint64_t maxBytes, std::string_view what) {
-    const std::uint64_t size = checkInputFile(file, maxBytes, what);
+namespace {
+
+// Reads `size` bytes (checkInputFile's answer) of `file` into `out`.
+void readWhole(const std::filesystem::path& file, std::uint64_t size, char* out) {
     std::ifstream in(file, std::ios::binary);
     if (!in) throw IoError(file, "cannot open for reading");
-    std::string bytes(size, '\0');
-    in.read(bytes.data(), std::streamsize(size));
+    in.read(out, std::streamsize(size));
     if (std::uint64_t(in.gcount()) != size) throw IoError(file, "short read");
+}
+
+}  // namespace
+
+std::string readInputFile(const std::filesystem::path& file, std::uint64_t maxBytes, std::string_view what) {
+    const std::uint64_t size = checkInputFile(file, maxBytes, what);
+    std::string bytes(size, '\0');
+    readWhole(file, size, bytes.data());
+    return bytes;
+}
+
+InputBytes readInputBytes(const std::filesystem::path& file, std::uint64_t maxBytes, std::string_view what) {
+    const std::uint64_t size = checkInputFile(file, maxBytes, what);
+    InputBytes bytes;
+    bytes.data.reset(new char[std::max<std::uint64_t>(size, 1)]);  // not value-initialised: the read fills it
+    bytes.size = std::size_t(size);
+    readWhole(file, size, bytes.data.get());
     return bytes;
 }
 

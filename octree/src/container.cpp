@@ -12,7 +12,10 @@
 #include <xxhash.h>
 
 #include <fstream>
+#include <memory>
+#include <new>
 #include <sstream>
+#include <stdexcept>
 
 namespace vtex::octree::detail {
 
@@ -33,20 +36,24 @@ std::uint64_t tableChecksum(std::string_view bytes, std::size_t tableEnd) {
     return checksum(guarded);
 }
 
-std::string containerHeader(std::string_view magic, std::uint32_t version, const std::vector<OutSection>& sections) {
+namespace {
+
+// The header and section table of a container whose sections have the tags, sizes and
+// checksums of `entries` (their offsets follow from the sizes), in that order.
+std::string containerHeader(std::string_view magic, std::uint32_t version, const std::vector<TableEntry>& entries) {
     ByteWriter header;
     header.bytes(magic);
     header.u32(version);
-    header.u32(std::uint32_t(sections.size()));
+    header.u32(std::uint32_t(entries.size()));
     header.u64(0);  // table checksum, filled below
-    std::uint64_t offset = kHeaderSize + kTableEntrySize * sections.size();
-    for (const auto& section : sections) {
-        header.bytes(section.tag);
+    std::uint64_t offset = kHeaderSize + kTableEntrySize * entries.size();
+    for (const auto& entry : entries) {
+        header.bytes(entry.tag);
         header.u32(0);
         header.u64(offset);
-        header.u64(section.payload.size());
-        header.u64(checksum(section.payload));
-        offset += section.payload.size();
+        header.u64(entry.size);
+        header.u64(entry.sum);
+        offset += entry.size;
     }
     std::string& bytes = header.str();
     const std::uint64_t guard = tableChecksum(bytes, bytes.size());
@@ -54,9 +61,14 @@ std::string containerHeader(std::string_view magic, std::uint32_t version, const
     return std::move(bytes);
 }
 
+}  // namespace
+
 std::string writeContainer(std::string_view magic, std::uint32_t version,
                            const std::vector<OutSection>& sections) {
-    std::string bytes = containerHeader(magic, version, sections);
+    std::vector<TableEntry> entries;
+    for (const auto& section : sections)
+        entries.push_back({section.tag, 0, section.payload.size(), checksum(section.payload)});
+    std::string bytes = containerHeader(magic, version, entries);
     std::size_t size = bytes.size();
     for (const auto& section : sections) size += section.payload.size();
     bytes.reserve(size);
@@ -65,12 +77,31 @@ std::string writeContainer(std::string_view magic, std::uint32_t version,
 }
 
 void writeContainerFile(const std::filesystem::path& file, std::string_view magic, std::uint32_t version,
-                        const std::vector<OutSection>& sections) {
+                        const std::vector<StreamedSection>& sections) {
     AtomicOutputFile out(file);
-    const std::string header = containerHeader(magic, version, sections);
-    out.stream().write(header.data(), std::streamsize(header.size()));
-    for (const auto& section : sections)
-        out.stream().write(section.payload.data(), std::streamsize(section.payload.size()));
+    std::ostream& stream = out.stream();
+    const std::string placeholder(kHeaderSize + kTableEntrySize * sections.size(), '\0');
+    stream.write(placeholder.data(), std::streamsize(placeholder.size()));
+    // XXH3's streaming state gives the value XXH3_64bits gives the joined pieces.
+    const std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state(XXH3_createState(), &XXH3_freeState);
+    if (!state) throw std::bad_alloc();
+    std::vector<TableEntry> entries;
+    for (const auto& section : sections) {
+        XXH3_64bits_reset(state.get());
+        std::uint64_t written = 0;
+        section.produce([&](std::string_view piece) {
+            XXH3_64bits_update(state.get(), piece.data(), piece.size());
+            stream.write(piece.data(), std::streamsize(piece.size()));
+            written += piece.size();
+        });
+        if (written != section.size)
+            throw std::logic_error("container section " + section.tag + ": " + std::to_string(written) +
+                                   " bytes written, " + std::to_string(section.size) + " announced");
+        entries.push_back({section.tag, 0, section.size, XXH3_64bits_digest(state.get())});
+    }
+    const std::string header = containerHeader(magic, version, entries);
+    stream.seekp(0);
+    stream.write(header.data(), std::streamsize(header.size()));
     out.commit();
 }
 

@@ -122,15 +122,23 @@ std::string readTable(std::string_view bytes, std::uint64_t fileSize, std::strin
 /// A tag as it may be printed in a message: bytes outside printable ASCII become '?'.
 std::string printableTag(std::string_view raw);
 
-/// The header and section table of a container holding `sections`, in that order.
-std::string containerHeader(std::string_view magic, std::uint32_t version, const std::vector<OutSection>& sections);
 /// The whole container as bytes.
 std::string writeContainer(std::string_view magic, std::uint32_t version,
                            const std::vector<OutSection>& sections);
-/// The same bytes written to `file` atomically (core/atomic_file.h), the sections streamed from
-/// where they are rather than first joined into one more copy of the whole file.
+
+/// A section whose payload is made piece by piece while it is written: `size` bytes, which
+/// `produce` hands to `emit` in order, in pieces of any size.
+struct StreamedSection {
+    std::string tag;  ///< exactly 4 characters
+    std::uint64_t size = 0;
+    std::function<void(const std::function<void(std::string_view)>& emit)> produce;
+};
+/// The container writeContainer makes of the same payloads, written to `file` atomically
+/// (core/atomic_file.h): each piece is checksummed and written as it comes, and the header and
+/// table, which hold the checksums, last, into the space left for them at the start. No payload
+/// is ever whole in memory (a 1024³ texel's finest level is 0.2 GB).
 void writeContainerFile(const std::filesystem::path& file, std::string_view magic, std::uint32_t version,
-                        const std::vector<OutSection>& sections);
+                        const std::vector<StreamedSection>& sections);
 
 /// Checks magic, version, table and every section checksum; throws vtex::InputError naming
 /// `kind` and the failing section.
@@ -152,7 +160,7 @@ void writeVoxelData(ByteWriter& w, const VoxelData& d);
 void storeVoxelData(char* out, const VoxelData& d);
 VoxelData readVoxelData(ByteReader& r);
 /// A problem with a parsed voxel (non-finite, negative, empty when not allowed), or empty.
-std::string checkVoxelData(const VoxelData& d, bool allowEmpty);
+std::string_view checkVoxelData(const VoxelData& d, bool allowEmpty);
 
 /// Refuses a container with a section `known` does not accept, or one tag twice (the readers
 /// take the first of each tag they ask for: a second HEAD would be silently ignored).

@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <bit>
 #include <cctype>
 #include <cmath>
@@ -116,17 +117,33 @@ namespace {
 
 constexpr std::size_t kNodeRecordSize = 1 + detail::kVoxelRecordSize;
 
-// The container's sections of `octree`. A level's records have a fixed size, so its section
-// is filled from all threads (a 1024³ texel stores some 10⁷ nodes).
-std::vector<detail::OutSection> vtoSections(const Octree& octree) {
+// The records of nodes [begin, end) at `out`, kNodeRecordSize bytes each. Records have a fixed
+// size, so they are filled from all threads (a 1024³ texel stores some 10⁷ nodes).
+void storeNodeRecords(const std::vector<OctreeNode>& nodes, std::size_t begin, std::size_t end, char* out) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 8192), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            char* record = out + kNodeRecordSize * (i - begin);
+            record[0] = char(nodes[i].childMask);
+            detail::storeVoxelData(record + 1, nodes[i].data);
+        }
+    });
+}
+
+// A level's section opens with its node count.
+std::string levelCountBytes(const std::vector<OctreeNode>& nodes) {
+    detail::ByteWriter count;
+    count.u64(nodes.size());
+    return std::move(count.str());
+}
+
+// The HEAD and STAT sections of `octree`.
+std::vector<detail::OutSection> vtoHeadAndStats(const Octree& octree) {
     using namespace detail;
-    std::vector<OutSection> sections;
     ByteWriter head;
     writeVolumeInfo(head, octree.info.source);
     head.u8(octree.info.rule == FilterRule::Neyret ? 0 : 1);
     head.f32(octree.info.tolerance);
     head.u32(octree.levelCount());
-    sections.push_back({"HEAD", std::move(head.str())});
     ByteWriter stats;
     for (const auto& s : octree.stats) {
         stats.u64(s.storedNodes);
@@ -137,23 +154,18 @@ std::vector<detail::OutSection> vtoSections(const Octree& octree) {
         stats.f64(s.filterErrorMax);
         stats.u64(s.filterErrorSamples);
     }
-    sections.push_back({"STAT", std::move(stats.str())});
+    return {{"HEAD", std::move(head.str())}, {"STAT", std::move(stats.str())}};
+}
+
+// The container's sections of `octree`, whole in memory.
+std::vector<detail::OutSection> vtoSections(const Octree& octree) {
+    std::vector<detail::OutSection> sections = vtoHeadAndStats(octree);
     for (std::uint32_t l = 0; l < octree.levelCount(); ++l) {
         const auto& nodes = octree.levels[l];
-        ByteWriter count;
-        count.u64(nodes.size());
-        std::string bytes = std::move(count.str());
+        std::string bytes = levelCountBytes(nodes);
         bytes.resize(8 + kNodeRecordSize * nodes.size());
-        char* records = bytes.data() + 8;
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nodes.size(), 8192),
-                          [&](const tbb::blocked_range<std::size_t>& range) {
-                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                                  char* record = records + kNodeRecordSize * i;
-                                  record[0] = char(nodes[i].childMask);
-                                  storeVoxelData(record + 1, nodes[i].data);
-                              }
-                          });
-        sections.push_back({levelTag(l), std::move(bytes)});
+        storeNodeRecords(nodes, 0, nodes.size(), bytes.data() + 8);
+        sections.push_back({detail::levelTag(l), std::move(bytes)});
     }
     return sections;
 }
@@ -162,6 +174,30 @@ std::vector<detail::OutSection> vtoSections(const Octree& octree) {
 
 std::string serializeVto(const Octree& octree) {
     return detail::writeContainer(detail::kVtoMagic, kVtoVersion, vtoSections(octree));
+}
+
+void writeVto(const Octree& octree, const std::filesystem::path& file) {
+    // The same bytes as serializeVto, each level made and written a piece at a time through one
+    // buffer: a whole copy of the tree in file form was the largest allocation after the tree's.
+    constexpr std::size_t kPieceNodes = std::size_t(1) << 15;
+    std::string piece;
+    std::vector<detail::StreamedSection> sections;
+    for (auto& section : vtoHeadAndStats(octree))
+        sections.push_back({section.tag, section.payload.size(),
+                            [payload = std::move(section.payload)](const auto& emit) { emit(payload); }});
+    for (std::uint32_t l = 0; l < octree.levelCount(); ++l) {
+        const auto& nodes = octree.levels[l];
+        sections.push_back({detail::levelTag(l), 8 + kNodeRecordSize * nodes.size(), [&nodes, &piece](const auto& emit) {
+                                emit(levelCountBytes(nodes));
+                                for (std::size_t begin = 0; begin < nodes.size(); begin += kPieceNodes) {
+                                    const std::size_t end = std::min(nodes.size(), begin + kPieceNodes);
+                                    piece.resize(kNodeRecordSize * (end - begin));
+                                    storeNodeRecords(nodes, begin, end, piece.data());
+                                    emit(piece);
+                                }
+                            }});
+    }
+    detail::writeContainerFile(file, detail::kVtoMagic, kVtoVersion, sections);
 }
 
 Octree parseVto(std::string_view bytes, const std::filesystem::path& file) {
@@ -177,10 +213,6 @@ Octree parseVto(std::string_view bytes, const std::filesystem::path& file) {
     for (std::uint32_t l = 0; l < levelCount; ++l)
         expected = parseVtoLevel(requireSection(sections, levelTag(l), file), l, expected, tree, tree.levels[l], file);
     return tree;
-}
-
-void writeVto(const Octree& octree, const std::filesystem::path& file) {
-    detail::writeContainerFile(file, detail::kVtoMagic, kVtoVersion, vtoSections(octree));
 }
 
 Octree readVto(const std::filesystem::path& file) {

@@ -12,7 +12,7 @@
 // build of the same volume yields.
 #include <vtex/octree/octree.h>
 
-#include "hash.h"
+#include "pyramid.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -22,33 +22,15 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
+#include <type_traits>
+#include <utility>
 
 namespace vtex::octree {
 namespace {
 
-constexpr std::uint8_t kSource = 1;  // a block given by the volume: it has no children here
-
-struct PNode {
-    std::uint64_t key;
-    VoxelData data;
-    float filterError;  // NaN: not measured yet
-    std::uint8_t flags;
-};
-
-using Level = std::vector<PNode>;
-
-using detail::mix64;
-
-// Whether the filter error of node `key` of `level` is measured, given that the level has
-// `count` filtered nodes: a hash-selected sample of about `samples` of them, independent of the
-// order in which nodes were built, so an update and a full build measure the same nodes.
-bool isSampled(std::uint64_t key, std::uint32_t level, std::uint64_t count, std::uint64_t samples) {
-    if (samples == 0 || count <= samples) return true;
-    const double fraction = double(samples) / double(count);
-    const std::uint64_t threshold = std::uint64_t(fraction * 18446744073709551615.0);
-    return mix64(key ^ (std::uint64_t(level) << 58)) < threshold;
-}
+using namespace detail;
 
 // A box of node indices at some level, half-open.
 struct LevelBox {
@@ -67,65 +49,6 @@ LevelBox boxAtLevel(const VoxelBox& box, std::uint32_t shift) {
         b.max[a] = box.max[a] > box.min[a] ? ((box.max[a] - 1) >> shift) + 1 : b.min[a];
     }
     return b;
-}
-
-struct Filtered {
-    VoxelData data;
-    std::vector<Mat3> forms;  // what the rule averages, per child with an ellipsoid
-    std::vector<double> weights;
-    std::optional<Ellipsoid> result;
-};
-
-// The design's filter for one parent from its (1 to 8) non-empty children. The children are
-// read through storedFilterForm, not rebuilt as Ellipsoids: this runs once per node of the
-// pyramid and was the build's cost (an eigensolver and elliptic integrals per child).
-void filterChildren(const PNode* children, std::size_t count, FilterRule rule, Filtered& out) {
-    out.forms.clear();
-    out.weights.clear();
-    out.result.reset();
-    // Eight identical children: the mean is the child itself, bit for bit (so that tolerance 0
-    // collapses exactly constant regions).
-    if (count == 8) {
-        bool same = true;
-        for (std::size_t i = 1; i < 8 && same; ++i) same = children[i].data == children[0].data;
-        if (same) {
-            out.data = children[0].data;
-            return;
-        }
-    }
-    double mass = 0;
-    double albedo[3] = {0, 0, 0};
-    for (std::size_t i = 0; i < count; ++i) {
-        const VoxelData& d = children[i].data;
-        const double w = d.density;
-        mass += w;
-        for (int c = 0; c < 3; ++c) albedo[c] += w * d.albedo[c];
-        if (auto form = storedFilterForm(d, rule)) {
-            out.forms.push_back(*form);
-            out.weights.push_back(w);
-        }
-    }
-    VoxelData& p = out.data;
-    p.density = float(mass / 8.0);
-    for (int c = 0; c < 3; ++c) p.albedo[c] = mass > 0 ? float(albedo[c] / mass) : 0.0f;
-    if (!out.forms.empty()) out.result = filterForms(out.forms, out.weights, rule);
-    if (out.result) packEllipsoid(*out.result, p);
-    else packIsotropic(p);
-}
-
-// The filter error of one parent (filterError: its NDF against the mixture of its children's),
-// with the children rebuilt as Ellipsoids; for the sampled nodes only.
-double measureFilterError(const PNode* children, std::size_t count, FilterRule rule, Filtered& f) {
-    filterChildren(children, count, rule, f);
-    if (!f.result) return 0;
-    std::vector<Ellipsoid> ellipsoids;
-    std::vector<double> weights;
-    for (std::size_t i = 0; i < count; ++i)
-        if (auto e = unpackEllipsoid(children[i].data)) {
-            ellipsoids.push_back(*e);
-            weights.push_back(children[i].data.density);
-        }
-    return filterError(*f.result, ellipsoids, weights);
 }
 
 // Indices where a new parent starts in a sorted child level, restricted to `keep(parentKey)`.
@@ -164,9 +87,12 @@ struct OctreeBuilder::Impl {
 
     std::uint32_t L() const { return volume.info.levels; }
 
-    // Filters the parents (keys passing `keep`) of level `childLevel`.
+    // Filters the parents (keys passing `keep`) of level `childLevel`. `measure`: these are all
+    // the filtered nodes of their level (a full build), so which of them measureFilterErrors
+    // samples is known now, and their filter errors are measured from the filter just made
+    // rather than from a second one later.
     template <class Keep>
-    Level filterParents(std::uint32_t childLevel, Keep keep, Progress& progress) {
+    Level filterParents(std::uint32_t childLevel, Keep keep, bool measure, Progress& progress) {
         const Level& children = levels[childLevel];
         const std::vector<std::size_t> starts = groupStarts(children, keep);
         Level parents(starts.size());
@@ -180,12 +106,15 @@ struct OctreeBuilder::Impl {
                                   const std::uint64_t parent = children[begin].key >> 3;
                                   while (end < children.size() && (children[end].key >> 3) == parent) ++end;
                                   filterChildren(&children[begin], end - begin, options.rule, f);
-                                  parents[g] = PNode{parent, f.data, std::numeric_limits<float>::quiet_NaN(), 0};
+                                  const bool sampled = measure && isSampled(parent, parentLevel, starts.size(),
+                                                                            options.filterErrorSamples);
+                                  const float error = sampled ? float(filterErrorOf(&children[begin], end - begin, f))
+                                                              : std::numeric_limits<float>::quiet_NaN();
+                                  parents[g] = PNode{parent, f.data, error, 0};
                               }
                               progress.advance(range.size());
                           });
         filtered += parents.size();
-        (void)parentLevel;
         return parents;
     }
 
@@ -206,15 +135,24 @@ struct OctreeBuilder::Impl {
         // fresh pages cleared about twice over.
         std::vector<std::size_t> counts(L() + 1, 0);
         for (const auto& b : volume.blocks) ++counts[b.level];
-        for (std::uint32_t l = 0; l <= L(); ++l) sources[l].reserve(counts[l]);
-        for (const auto& b : volume.blocks)
-            sources[b.level].push_back(PNode{b.key, b.data, std::numeric_limits<float>::quiet_NaN(), kSource});
-        std::uint64_t total = 0;
-        for (const auto& b : volume.blocks) total += b.level == L() ? 1 : 0;
+        const auto& blocks = volume.blocks;
+        if (counts[L()] == blocks.size()) {
+            // Every block a finest voxel (any texel without a solid interior): copied from all threads.
+            sources[L()].resize(blocks.size());
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16384),
+                              [&](const tbb::blocked_range<std::size_t>& range) {
+                                  for (std::size_t i = range.begin(); i != range.end(); ++i)
+                                      sources[L()][i] = sourceNode(blocks[i]);
+                              });
+        } else {
+            for (std::uint32_t l = 0; l <= L(); ++l) sources[l].reserve(counts[l]);
+            for (const auto& b : blocks) sources[b.level].push_back(sourceNode(b));
+        }
+        const std::uint64_t total = counts[L()];
         progress.start("filter", total + total / 7 + 1);
         levels[L()] = std::move(sources[L()]);
         for (std::uint32_t l = L(); l-- > 0;) {
-            Level parents = filterParents(l + 1, [](std::uint64_t) { return true; }, progress);
+            Level parents = filterParents(l + 1, [](std::uint64_t) { return true; }, true, progress);
             levels[l] = mergeSorted(std::move(parents), std::move(sources[l]));
         }
         progress.finish();
@@ -261,75 +199,89 @@ struct OctreeBuilder::Impl {
         }
     }
 
+    // Whether `node` (level l, its children [b, e) at level l + 1) may stand for all its
+    // descendants within the tolerance; if so, the range of what they hold goes to `range`.
+    // `rangeOfChild(c)` is read only for children that may stand for theirs.
+    template <class RangeOfChild>
+    bool mayStandForDescendants(const PNode& node, std::uint32_t l, std::size_t b, std::size_t e,
+                                const std::vector<std::uint8_t>& childCollapsible, RangeOfChild rangeOfChild,
+                                Range& range) const {
+        const VoxelData& p = node.data;
+        if (node.flags & kSource) {
+            range = pointRange(p);
+            return true;
+        }
+        for (std::size_t c = b; c < e; ++c)
+            if (!childCollapsible[c]) return false;
+        if (!options.compress) return false;
+        const double eps = options.tolerance;
+        const Range self = pointRange(p);
+        const double selfTrace = double(self.smax[0]) + double(self.smax[1]) + double(self.smax[2]);
+        // Transmittance: standing for its descendants, the node changes the extinction anywhere
+        // in its voxel by at most Δρ·Â, Â ≤ √(tr S) for every descendant's and its own
+        // normalised S, so the transmittance along any chord of its voxel (length ≤ √3·h) by at
+        // most Δρ·√(tr S_max)·√3·h (|e^−a − e^−b| ≤ |a − b|), for τ = 1. A missing child is
+        // density 0: a node merges with empty space when its own optical depth across itself is
+        // within ε.
+        const auto transmittanceChange = [&](double dRho, double trace) {
+            return dRho * std::sqrt(trace) * std::sqrt(3.0) * std::ldexp(1.0, -int(l));
+        };
+        // With a child missing, Δρ ≥ ρ and tr S_max ≥ its own: this lower bound of the change
+        // (the same expression, rounded the same way on smaller operands) already refuses most
+        // surface nodes, before any child's range is read (unpacking S is the cost here).
+        if (e - b < 8 && transmittanceChange(double(p.density), std::max(0.0, selfTrace)) > eps) return false;
+        Range r = rangeOfChild(b);
+        if (e - b < 8) r.dmin = 0;  // missing children are empty
+        for (std::size_t c = b; c < e; ++c) {
+            const Range cr = rangeOfChild(c);
+            r.dmin = std::min(r.dmin, cr.dmin);
+            r.dmax = std::max(r.dmax, cr.dmax);
+            for (int k = 0; k < 6; ++k) {
+                r.smin[k] = std::min(r.smin[k], cr.smin[k]);
+                r.smax[k] = std::max(r.smax[k], cr.smax[k]);
+            }
+            for (int k = 0; k < 3; ++k) {
+                r.amin[k] = std::min(r.amin[k], cr.amin[k]);
+                r.amax[k] = std::max(r.amax[k], cr.amax[k]);
+            }
+        }
+        const double dRho = std::max(double(p.density) - double(r.dmin), double(r.dmax) - double(p.density));
+        const double childTrace = double(r.smax[0]) + double(r.smax[1]) + double(r.smax[2]);
+        if (!(transmittanceChange(dRho, std::max({0.0, childTrace, selfTrace})) <= eps)) return false;
+        for (int k = 0; k < 6; ++k)
+            if (!(double(self.smin[k]) - double(r.smin[k]) <= eps && double(r.smax[k]) - double(self.smin[k]) <= eps))
+                return false;
+        for (int k = 0; k < 3; ++k)
+            if (!(double(p.albedo[k]) - double(r.amin[k]) <= eps && double(r.amax[k]) - double(p.albedo[k]) <= eps))
+                return false;
+        range = r;
+        return true;
+    }
+
     // Bottom-up: which pyramid nodes may stand for all their descendants within the tolerance.
     // Ranges of the finest level are not stored (they are points, read from each node's data):
-    // at 1024³ that level alone would take 80 bytes per voxel.
+    // at 1024³ that level alone would take 80 bytes per voxel. A level's ranges are written only
+    // for its collapsible nodes, the only ones a parent reads, into storage left uninitialised,
+    // so the pages of the others are never touched.
     std::vector<std::vector<std::uint8_t>> collapsibleNodes(const std::vector<std::vector<std::uint32_t>>& starts,
                                                             Progress& progress) const {
         const std::uint32_t L = this->L();
-        const double eps = options.tolerance;
         std::vector<std::vector<std::uint8_t>> collapsible(L + 1);
         collapsible[L].assign(levels[L].size(), 1);
-        std::vector<Range> below, current;
+        std::unique_ptr<Range[]> below, current;
         for (std::uint32_t l = L; l-- > 0;) {
             const Level& level = levels[l];
             const auto rangeOfChild = [&](std::size_t c) {
                 return l + 1 == L ? pointRange(levels[L][c].data) : below[c];
             };
             collapsible[l].assign(level.size(), 0);
-            current.assign(level.size(), Range{});
+            current.reset(new Range[level.size()]);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, level.size(), 1024),
                               [&](const tbb::blocked_range<std::size_t>& range) {
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                const PNode& node = level[i];
-                const VoxelData& p = node.data;
-                current[i] = pointRange(p);
-                const Range self = current[i];
-                if (node.flags & kSource) {
-                    collapsible[l][i] = 1;
-                    continue;
-                }
-                const std::size_t b = starts[l][i], e = starts[l][i + 1];
-                bool ok = true;
-                Range r = rangeOfChild(b);
-                if (e - b < 8) r.dmin = 0;  // missing children are empty
-                for (std::size_t c = b; c < e && ok; ++c) {
-                    ok = collapsible[l + 1][c] != 0;
-                    const Range cr = rangeOfChild(c);
-                    r.dmin = std::min(r.dmin, cr.dmin);
-                    r.dmax = std::max(r.dmax, cr.dmax);
-                    for (int k = 0; k < 6; ++k) {
-                        r.smin[k] = std::min(r.smin[k], cr.smin[k]);
-                        r.smax[k] = std::max(r.smax[k], cr.smax[k]);
-                    }
-                    for (int k = 0; k < 3; ++k) {
-                        r.amin[k] = std::min(r.amin[k], cr.amin[k]);
-                        r.amax[k] = std::max(r.amax[k], cr.amax[k]);
-                    }
-                }
-                if (!ok || !options.compress) continue;
-                // Transmittance: standing for its descendants, the node changes the extinction
-                // anywhere in its voxel by at most Δρ·Â, Â ≤ √(tr S) for every descendant's and
-                // its own normalised S, so the transmittance along any chord of its voxel
-                // (length ≤ √3·h) by at most Δρ·√(tr S_max)·√3·h (|e^−a − e^−b| ≤ |a − b|), for
-                // τ = 1. A missing child is density 0: a node merges with empty space when its own
-                // optical depth across itself is within ε.
-                const double dRho = std::max(double(p.density) - double(r.dmin), double(r.dmax) - double(p.density));
-                const double areaBound = std::sqrt(std::max({0.0, double(r.smax[0]) + double(r.smax[1]) + double(r.smax[2]),
-                                                             double(self.smax[0]) + double(self.smax[1]) + double(self.smax[2])}));
-                ok = dRho * areaBound * std::sqrt(3.0) * std::ldexp(1.0, -int(l)) <= eps;
-                for (int k = 0; k < 6 && ok; ++k)
-                    ok = double(self.smin[k]) - double(r.smin[k]) <= eps &&
-                         double(r.smax[k]) - double(self.smin[k]) <= eps;
-                for (int k = 0; k < 3 && ok; ++k)
-                    ok = double(p.albedo[k]) - double(r.amin[k]) <= eps &&
-                         double(r.amax[k]) - double(p.albedo[k]) <= eps;
-                if (ok) {
-                    collapsible[l][i] = 1;
-                    current[i] = r;
-                }
-            }
-            });
+                                  for (std::size_t i = range.begin(); i != range.end(); ++i)
+                                      collapsible[l][i] = mayStandForDescendants(level[i], l, starts[l][i], starts[l][i + 1],
+                                                                                 collapsible[l + 1], rangeOfChild, current[i]);
+                              });
             std::swap(below, current);
             progress.advance(1);
         }
@@ -397,8 +349,8 @@ struct OctreeBuilder::Impl {
                                       PNode& node = level[selected[s]];
                                       if (!std::isnan(node.filterError)) continue;
                                       const std::size_t b = starts[l][selected[s]], e = starts[l][selected[s] + 1];
-                                      node.filterError =
-                                          float(measureFilterError(&levels[l + 1][b], e - b, options.rule, f));
+                                      filterChildren(&levels[l + 1][b], e - b, options.rule, f);
+                                      node.filterError = float(filterErrorOf(&levels[l + 1][b], e - b, f));
                                   }
                               });
             double sum = 0, max = 0;
@@ -534,7 +486,7 @@ void OctreeBuilder::updateRegion(const VoxelBox& region, std::vector<VolumeBlock
     std::vector<Level> sources(L + 1);
     for (const auto& b : m.volume.blocks)
         if (!disjoint(extentOf(b.key, b.level), dirty))
-            sources[b.level].push_back(PNode{b.key, b.data, std::numeric_limits<float>::quiet_NaN(), kSource});
+            sources[b.level].push_back(sourceNode(b));
 
     progress.start("refilter", L + 1);
     for (std::uint32_t l = L + 1; l-- > 0;) {
@@ -546,7 +498,7 @@ void OctreeBuilder::updateRegion(const VoxelBox& region, std::vector<VolumeBlock
         Level fresh = std::move(sources[l]);
         if (l < L) {
             Level parents = m.filterParents(l + 1, [&](std::uint64_t parent) { return box.contains(parent); },
-                                            progress);
+                                            false, progress);
             // A source block at this level has no children below it, so no parent collides with it.
             fresh = Impl::mergeSorted(std::move(parents), std::move(fresh));
         }

@@ -3,6 +3,7 @@
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
+#include <vtex/core/input_file.h>
 #include <vtex/octree/volume.h>
 
 #include <tbb/blocked_range.h>
@@ -12,6 +13,8 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstring>
+#include <type_traits>
 
 namespace vtex::octree {
 namespace {
@@ -28,6 +31,33 @@ bool allFinite(const VoxelData& d) {
     for (float v : d.albedo)
         if (!std::isfinite(v)) return false;
     return true;
+}
+
+// A little-endian value of the file at `p`, whatever the host.
+template <class T>
+T loadLittleEndian(const char* p) {
+    static_assert(sizeof(T) == 4 || sizeof(T) == 8);
+    using Bits = std::conditional_t<sizeof(T) == 4, std::uint32_t, std::uint64_t>;
+    Bits bits;
+    std::memcpy(&bits, p, sizeof bits);
+    if constexpr (std::endian::native == std::endian::big)
+        bits = sizeof bits == 4 ? Bits(__builtin_bswap32(std::uint32_t(bits))) : Bits(__builtin_bswap64(bits));
+    return std::bit_cast<T>(bits);
+}
+
+// One kBlockRecordSize-byte record of the VOXL section (the layout serializeVtl writes): the
+// whole record is in bounds, so no field needs ByteReader's checks.
+VolumeBlock decodeBlock(const char* record) {
+    VolumeBlock b;
+    b.key = loadLittleEndian<std::uint64_t>(record);
+    b.level = std::uint8_t(record[8]);
+    b.flags = std::uint8_t(record[9]);
+    const char* f = record + 10;
+    b.data.density = loadLittleEndian<float>(f);
+    for (float& v : b.data.rotation) v = loadLittleEndian<float>(f += 4);
+    for (float& v : b.data.sigma) v = loadLittleEndian<float>(f += 4);
+    for (float& v : b.data.albedo) v = loadLittleEndian<float>(f += 4);
+    return b;
 }
 
 }  // namespace
@@ -63,8 +93,9 @@ VoxelData readVoxelData(ByteReader& r) {
 // Validates one stored voxel's values, not only its checksum (issue 14, item 8): finite,
 // non-negative density; for a non-empty voxel a unit quaternion (to 1e-3: the format stores it
 // normalised in float), σ non-negative and not all zero (S would vanish), and an albedo in
-// [0, 1] (a glTF base colour is, and filtering averages it). Returns a problem or empty.
-std::string checkVoxelData(const VoxelData& d, bool allowEmpty) {
+// [0, 1] (a glTF base colour is, and filtering averages it). Returns a problem or empty (a
+// literal: no string is built for each of a file's millions of valid voxels).
+std::string_view checkVoxelData(const VoxelData& d, bool allowEmpty) {
     if (!allFinite(d)) return "non-finite value";
     if (d.density < 0) return "negative density";
     if (!allowEmpty && d.density == 0) return "empty voxel stored";
@@ -166,11 +197,14 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
     if (!reader.ok() || count > reader.remaining() / kBlockRecordSize ||
         count * kBlockRecordSize != reader.remaining())
         throw InputError(file, "size does not match its block count " + std::to_string(count), where);
-    volume.blocks.resize(count);
     const std::uint32_t L = volume.info.levels;
     const char* records = payload.data() + 8;
+    // Decoded in one pass into reserved storage: resizing first would clear every block (a
+    // 1024³ volume holds 4·10⁶) only for the decoder to overwrite it.
+    volume.blocks.reserve(count);
+    for (std::uint64_t i = 0; i < count; ++i) volume.blocks.push_back(decodeBlock(records + kBlockRecordSize * i));
     // A block's problem, or empty; blocks i − 1 and i must not overlap (keys strictly in order).
-    const auto problemAt = [&](std::uint64_t i) -> std::string {
+    const auto problemAt = [&](std::uint64_t i) -> std::string_view {
         const VolumeBlock& b = volume.blocks[i];
         if (b.level > L) return "level deeper than the resolution";
         if (b.flags > kBlockSolid) return "unknown block flags";
@@ -184,18 +218,7 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
         }
         return {};
     };
-    // Fixed-size records: decoded on all threads, then checked on all threads; the error names
-    // the first bad block, as a sequential reader would.
-    tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, count, 16384), [&](const auto& range) {
-        for (std::uint64_t i = range.begin(); i != range.end(); ++i) {
-            ByteReader r(std::string_view(records + kBlockRecordSize * i, kBlockRecordSize));
-            VolumeBlock& b = volume.blocks[i];
-            b.key = r.u64();
-            b.level = r.u8();
-            b.flags = r.u8();
-            b.data = readVoxelData(r);
-        }
-    });
+    // Checked on all threads; the error names the first bad block, as a sequential reader would.
     std::atomic<std::uint64_t> firstBad{count};
     tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, count, 16384), [&](const auto& range) {
         for (std::uint64_t i = range.begin(); i != range.end() && i < firstBad.load(); ++i)
@@ -206,7 +229,7 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
             }
     });
     if (firstBad < count)
-        throw InputError(file, problemAt(firstBad), where + ", block " + std::to_string(firstBad.load()));
+        throw InputError(file, std::string(problemAt(firstBad)), where + ", block " + std::to_string(firstBad.load()));
     return volume;
 }
 
@@ -214,6 +237,8 @@ void writeVtl(const SparseVolume& volume, const std::filesystem::path& file) {
     writeFileAtomically(file, serializeVtl(volume));
 }
 
-SparseVolume readVtl(const std::filesystem::path& file) { return parseVtl(readFileBytes(file), file); }
+SparseVolume readVtl(const std::filesystem::path& file) {
+    return parseVtl(readInputBytes(file, kMaxFileBytes, "file").view(), file);
+}
 
 }  // namespace vtex::octree

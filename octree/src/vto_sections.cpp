@@ -91,13 +91,14 @@ std::uint64_t parseVtoLevel(std::string_view payload, std::uint32_t l, std::uint
         OctreeNode& node = nodes[i];
         node.childMask = r.u8();
         node.data = readVoxelData(r);
-        const std::string nodeWhere = where + ", node " + std::to_string(i);
+        // Built only for a message: a level holds millions of nodes.
+        const auto nodeWhere = [&] { return where + ", node " + std::to_string(i); };
         // Only an empty root (an empty volume) may be stored empty.
         const bool mayBeEmpty = l == 0 && node.childMask == 0;
         if (const auto problem = checkVoxelData(node.data, mayBeEmpty); !problem.empty())
-            throw InputError(file, problem, nodeWhere);
-        if (l + 1 == levelCount && node.childMask != 0) throw InputError(file, "finest-level node with children", nodeWhere);
-        if (children > std::numeric_limits<std::uint32_t>::max()) throw InputError(file, "too many nodes", nodeWhere);
+            throw InputError(file, std::string(problem), nodeWhere());
+        if (l + 1 == levelCount && node.childMask != 0) throw InputError(file, "finest-level node with children", nodeWhere());
+        if (children > std::numeric_limits<std::uint32_t>::max()) throw InputError(file, "too many nodes", nodeWhere());
         node.firstChild = std::uint32_t(children);
         children += std::uint64_t(std::popcount(unsigned(node.childMask)));
     }
@@ -211,7 +212,7 @@ const TableEntry& requireEntry(const std::vector<TableEntry>& entries, std::stri
 
 std::shared_ptr<const Octree> openVto(const std::filesystem::path& file) {
     using namespace detail;
-    checkInputFile(file, std::uint64_t(1) << 40, "file");  // the same refusals as readVto's
+    checkInputFile(file, kMaxFileBytes, "file");  // the same refusals as readVto's
     // Closes the descriptor unless the loader has taken it.
     struct Descriptor {
         int fd;

@@ -4,6 +4,7 @@
 #include <vtex/octree/octree.h>
 
 #include "../../octree/src/container.h"
+#include "random_volume.h"
 
 #include <gtest/gtest.h>
 
@@ -84,6 +85,18 @@ TEST(VtoFormat, RoundTripIsBitExact) {
     std::filesystem::create_directories(path.parent_path());
     writeVto(tree, path);
     EXPECT_EQ(readVto(path), tree);
+}
+
+// writeVto streams each level in pieces of 32768 nodes and writes the header last (issue 13):
+// a tree whose finest level spans several pieces is written as the very bytes serializeVto makes.
+TEST(VtoFormat, WrittenFileIsTheSerialisedBytes) {
+    NullProgress progress;
+    const Octree tree = buildOctree(test::randomVolume(6, 80000, 21), {}, progress);
+    ASSERT_GT(tree.levels[6].size(), 2u * 32768u);
+    const auto path = std::filesystem::path(VTEX_TEST_TMP) / "streamed.vto";
+    std::filesystem::create_directories(path.parent_path());
+    writeVto(tree, path);
+    EXPECT_TRUE(readFileBytes(path) == serializeVto(tree));
 }
 
 TEST(VtoFormat, EverySingleBitFlipAndTruncationIsRefused) {

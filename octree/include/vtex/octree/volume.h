@@ -114,8 +114,11 @@ struct FileCheck {
 /// Checks the container of any vtex binary file (magic given as 8 bytes) without parsing it.
 FileCheck checkFile(std::string_view bytes, std::string_view magic, std::uint32_t supportedVersion);
 
+/// The largest .vtl or .vto file the readers accept (1 TiB).
+inline constexpr std::uint64_t kMaxFileBytes = std::uint64_t(1) << 40;
+
 /// Reads a whole file into memory, refusing anything above `maxBytes`. Throws vtex::IoError /
 /// vtex::InputError.
-std::string readFileBytes(const std::filesystem::path& file, std::uint64_t maxBytes = std::uint64_t(1) << 40);
+std::string readFileBytes(const std::filesystem::path& file, std::uint64_t maxBytes = kMaxFileBytes);
 
 }  // namespace vtex::octree

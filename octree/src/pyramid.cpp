@@ -1,0 +1,64 @@
+// The pyramid's nodes and the filter of one parent (pyramid.h).
+#include "pyramid.h"
+
+#include "hash.h"
+
+namespace vtex::octree::detail {
+
+bool isSampled(std::uint64_t key, std::uint32_t level, std::uint64_t count, std::uint64_t samples) {
+    if (samples == 0 || count <= samples) return true;
+    const double fraction = double(samples) / double(count);
+    const std::uint64_t threshold = std::uint64_t(fraction * 18446744073709551615.0);
+    return mix64(key ^ (std::uint64_t(level) << 58)) < threshold;
+}
+
+void filterChildren(const PNode* children, std::size_t count, FilterRule rule, Filtered& out) {
+    out.forms.clear();
+    out.weights.clear();
+    out.result.reset();
+    // Eight identical children: the mean is the child itself, bit for bit (so that tolerance 0
+    // collapses exactly constant regions).
+    if (count == 8) {
+        bool same = true;
+        for (std::size_t i = 1; i < 8 && same; ++i) same = children[i].data == children[0].data;
+        if (same) {
+            out.data = children[0].data;
+            return;
+        }
+    }
+    double mass = 0;
+    double albedo[3] = {0, 0, 0};
+    for (std::size_t i = 0; i < count; ++i) {
+        const VoxelData& d = children[i].data;
+        const double w = d.density;
+        mass += w;
+        for (int c = 0; c < 3; ++c) albedo[c] += w * d.albedo[c];
+        if (auto form = storedFilterForm(d, rule)) {
+            out.forms.push_back(*form);
+            out.weights.push_back(w);
+        }
+    }
+    VoxelData& p = out.data;
+    p.density = float(mass / 8.0);
+    for (int c = 0; c < 3; ++c) p.albedo[c] = mass > 0 ? float(albedo[c] / mass) : 0.0f;
+    if (!out.forms.empty()) out.result = filterForms(out.forms, out.weights, rule);
+    if (out.result) packEllipsoid(*out.result, p);
+    else packIsotropic(p);
+}
+
+// The filter error of one parent whose filter `f` of its children filterChildren has just made
+// (filterError: its NDF against the mixture of its children's), with the children rebuilt as
+// Ellipsoids; for the sampled nodes only.
+double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f) {
+    if (!f.result) return 0;
+    std::vector<Ellipsoid> ellipsoids;
+    std::vector<double> weights;
+    for (std::size_t i = 0; i < count; ++i)
+        if (auto e = unpackEllipsoid(children[i].data)) {
+            ellipsoids.push_back(*e);
+            weights.push_back(children[i].data.density);
+        }
+    return filterError(*f.result, ellipsoids, weights);
+}
+
+}  // namespace vtex::octree::detail
