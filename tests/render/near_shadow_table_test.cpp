@@ -47,9 +47,9 @@ double marchFrom(const MarchVolume& volume, int level, const Eigen::Vector3d& p0
 }  // namespace
 
 // Where its entries were measured the table is the march: a query whose path leaves its voxel
-// exactly at one of the points of a face the entry marched from, and whose stretch the tile's sides or top end (as they
-// end the entry's), gets the voxel's share exactly and the entry's march, so the two agree to the
-// float precision the entries are stored in. (Where the stretch's length ends it instead, the
+// exactly at one of the points of a face the entry marched from, and whose stretch the tile's
+// sides or top end (as they end the entry's), gets the voxel's share exactly and the entry's
+// march, so the two agree to the float precision the entries are stored in. (Where the stretch's length ends it instead, the
 // query's is shorter than the entry's by its share in its own voxel, taken off at the extinction
 // where the face's middle march ends: measured below.)
 TEST(NearShadowTable, IsTheMarchWhereItsEntriesWereMeasured) {
