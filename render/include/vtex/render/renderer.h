@@ -78,8 +78,8 @@ struct ApproximationBudget {
     /// A lattice query's first, exact stretch toward the light (the four lattice steps) comes
     /// from a table per voxel of the shadow level, shared by the cells that show one tile of the
     /// same texel under the same reference-space light direction (a flat field's cells): the
-    /// query's own voxel exactly, the rest of the stretch as from that voxel's centre, moved by
-    /// at most half a voxel (docs/render.md, "Shadows"); false: every query marches its stretch.
+    /// query's own voxel exactly, the rest interpolated from marches of 3×3 points of the face
+    /// it leaves by (docs/render.md, "Shadows"); false: every query marches its stretch.
     bool nearShadowTable = true;
     /// A level whose blend weight is below this is not marched, its weight going to the other
     /// level (docs/render.md, "Levels"); 0: both levels of every blend are marched (exact).
