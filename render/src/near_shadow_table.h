@@ -58,7 +58,7 @@ public:
         int light = -1;  ///< LightTransmittanceCache slot
         Vec3 lr = Vec3::Zero();
         Vec3 inverse = Vec3::Zero();  ///< 1 / lr, per component (∞ for 0)
-        std::array<std::atomic<std::atomic<float>*>, kMaxLevel + 1> levels{};
+        mutable std::array<std::atomic<std::atomic<float>*>, kMaxLevel + 1> levels{};
     };
 
     NearShadowTable() = default;
@@ -154,11 +154,12 @@ private:
     // division) up to maxStep or the tile's sides, top or floor: interpolated bilinearly
     // (extended to the face's edges), which keeps where on the face the query leaves — the
     // camera's queries sit on its side of a voxel, where its ray came through, and their light
-    // paths share that emptier side (on the bush field's middle view the face's mean alone made
-    // the stretch 2 % too dark, the voxel's centre 6 % too bright). Three points a side, not two:
+    // paths share that emptier side (on the bush field's middle view, with throw-away code not
+    // kept, the face's mean alone made the stretch too dark and the voxel's centre too bright). Three points a side, not two:
     // the transmittance across a face is convex, and interpolating between points that stand
     // for a quarter of it each made the stretch 0.5 % too dark on random queries in a bush
-    // (the midpoint rule's bias), with three 0.1 %. Where the tile's sides or top end both the
+    // (the midpoint rule's bias; kSide = 2 in NearShadowTable.IsCloseToTheMarchOnAverageInABush
+    // prints it), with three 0.1 %. Where the tile's sides or top end both the
     // query and the entries, their lengths agree; where maxStep does, the query's is shorter by
     // its share in its own voxel (at most a voxel's chord), taken off at the extinction where the
     // face's middle march ends.
@@ -240,7 +241,7 @@ private:
     }
 
     std::atomic<float>* table(const Slot& s, int level) const {
-        auto& entry = const_cast<Slot&>(s).levels[std::size_t(level)];
+        auto& entry = s.levels[std::size_t(level)];
         std::atomic<float>* values = entry.load(std::memory_order_acquire);
         if (values) return values;
         const std::size_t count = std::size_t(kPerVoxel) << (3 * level);

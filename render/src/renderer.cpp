@@ -276,12 +276,9 @@ private:
 // not the use, is what is known before the render.
 std::uint64_t latticeMemoryCap(const Scene& scene, const RenderOptions& options) {
     if (options.approximations.shadowCacheResolution <= 0) return 0;
-    const bool directional = std::any_of(scene.lights.begin(), scene.lights.end(),
-                                         [](const Light& l) { return l.type == LightType::Directional; });
-    const bool textured = !usedTexels(scene).empty();
-    if (!directional || !textured) return 0;
     const auto lights = std::uint64_t(std::count_if(scene.lights.begin(), scene.lights.end(),
                                                     [](const Light& l) { return l.type == LightType::Directional; }));
+    if (lights == 0 || usedTexels(scene).empty()) return 0;
     const std::uint64_t tables = options.approximations.nearShadowTable ? lights * detail::NearShadowTable::kBytesPerLight : 0;
     return std::uint64_t(detail::LightTransmittanceCache::kMaxNodes) * sizeof(float) + tables;
 }
