@@ -25,6 +25,19 @@
 
 namespace vtex::render::detail {
 
+/// The block of `count` atomic floats in `entry`, allocated on first use with every value NaN
+/// ("not computed yet"): a race allocates twice and keeps the first, so all threads see one block.
+/// Shared by the lattice's node blocks and the near shadow table's levels.
+inline std::atomic<float>* claimNanBlock(std::atomic<std::atomic<float>*>& entry, std::size_t count) {
+    std::atomic<float>* values = entry.load(std::memory_order_acquire);
+    if (values) return values;
+    auto* fresh = new std::atomic<float>[count];
+    for (std::size_t i = 0; i < count; ++i) fresh[i].store(std::numeric_limits<float>::quiet_NaN(), std::memory_order_relaxed);
+    if (entry.compare_exchange_strong(values, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) return fresh;
+    delete[] fresh;  // another thread was first
+    return values;
+}
+
 class LightTransmittanceCache {
 public:
     /// Nodes darker than this count as this dark: the optical depth stays finite (13.8).
@@ -98,15 +111,8 @@ public:
 
 private:
     std::atomic<float>* block(int slot, int prim) const {
-        std::atomic<std::atomic<float>*>& entry = mBlocks[std::size_t(slot) * mGrids.size() + std::size_t(prim)];
-        std::atomic<float>* values = entry.load(std::memory_order_acquire);
-        if (values) return values;
-        const std::size_t n = mGrids[std::size_t(prim)].nodes();
-        auto* fresh = new std::atomic<float>[n];
-        for (std::size_t i = 0; i < n; ++i) fresh[i].store(std::numeric_limits<float>::quiet_NaN(), std::memory_order_relaxed);
-        if (entry.compare_exchange_strong(values, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) return fresh;
-        delete[] fresh;  // another thread was first
-        return values;
+        return claimNanBlock(mBlocks[std::size_t(slot) * mGrids.size() + std::size_t(prim)],
+                             mGrids[std::size_t(prim)].nodes());
     }
 
     std::vector<Vec3> mDirections;

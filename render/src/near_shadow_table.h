@@ -26,6 +26,7 @@
 #include <vtex/render/texel_march.h>
 
 #include "frame.h"
+#include "light_cache.h"
 #include "march.h"
 
 #include <algorithm>
@@ -241,15 +242,7 @@ private:
     }
 
     std::atomic<float>* table(const Slot& s, int level) const {
-        auto& entry = s.levels[std::size_t(level)];
-        std::atomic<float>* values = entry.load(std::memory_order_acquire);
-        if (values) return values;
-        const std::size_t count = std::size_t(kPerVoxel) << (3 * level);
-        auto* fresh = new std::atomic<float>[count];
-        for (std::size_t i = 0; i < count; ++i) fresh[i].store(std::numeric_limits<float>::quiet_NaN(), std::memory_order_relaxed);
-        if (entry.compare_exchange_strong(values, fresh, std::memory_order_acq_rel, std::memory_order_acquire)) return fresh;
-        delete[] fresh;  // another thread was first
-        return values;
+        return claimNanBlock(s.levels[std::size_t(level)], std::size_t(kPerVoxel) << (3 * level));
     }
 
     // A march darker than this is as dark (the queries' own cut-off is 1e-4).
