@@ -221,8 +221,11 @@ Color shadePhong(const std::vector<Light>& lights, const Vec3& x, Vec3 n, Vec3 n
 inline std::optional<Vec3> entryCoords(const Prim& prim, const Hit& hit, const Vec3& o, const Vec3& d, int hintPrim,
                                        const Vec3& hintR) {
     const CellSpan& span = hit.span;
-    const double tolerance = 1e-9 * std::max(1.0, std::abs(span.tOut)) + 1e-12 * prim.cell.size();
-    if (span.faceIn >= 0 && hit.t - span.tIn <= tolerance) return span.rIn;
+    // The cell's size (28 corner distances) only when the entry is not already within the
+    // tolerance's first term, as it nearly always is (hit.t is the span's own tIn).
+    const double slack = 1e-9 * std::max(1.0, std::abs(span.tOut));
+    if (span.faceIn >= 0 && (hit.t - span.tIn <= slack || hit.t - span.tIn <= slack + 1e-12 * prim.cell.size()))
+        return span.rIn;
     if (span.faceIn < 0 && hit.prim == hintPrim) return hintR;
     const Vec3 guess = span.faceIn >= 0
                            ? Vec3(span.rIn + (span.rOut - span.rIn) * std::clamp((hit.t - span.tIn) / (span.tOut - span.tIn), 0.0, 1.0))

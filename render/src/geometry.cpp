@@ -19,6 +19,20 @@
 namespace vtex::render {
 namespace {
 
+// The cell's map when it is affine (every mixed term of the trilinear map exactly zero: a
+// parallelepiped, as a flat face under a shell along its constant normal makes), as its origin
+// corner and Jacobian; false otherwise.
+bool affineMap(const std::array<Vec3, 8>& c, Mat3& j) {
+    // X = c0 + u·a + v·b + w·e + uv·(c3 − c1 − c2 + c0) + uw·(…) + vw·(…) + uvw·(…)
+    const bool affine = (c[3] - c[1] - c[2] + c[0]).isZero(0) && (c[5] - c[1] - c[4] + c[0]).isZero(0) &&
+                        (c[6] - c[2] - c[4] + c[0]).isZero(0) && (c[7] - c[3] - c[5] + c[1]).isZero(0);
+    if (!affine) return false;
+    j.col(0) = c[1] - c[0];
+    j.col(1) = c[2] - c[0];
+    j.col(2) = c[4] - c[0];
+    return true;
+}
+
 // Shared edges of adjacent patches must not leak rays through the crack that rounding opens
 // between them: accept parameters this far outside [0,1] and clamp them back.
 constexpr double kEdgeSlack = 1e-9;
@@ -206,6 +220,22 @@ Vec3 TrilinearCell::faceToCell(int face, double a, double b) {
 
 std::optional<Vec3> TrilinearCell::inverse(const Vec3& x, const Vec3& guess, double tolerance,
                                            double slack) const {
+    const auto accept = [&](const Vec3& r, double err, double target) {
+        return err <= target && (r.array() >= -slack).all() && (r.array() <= 1 + slack).all();
+    };
+    // An affine cell (a parallelepiped: a flat face under a shell along its constant normal) is
+    // inverted by one linear solve, exact up to rounding. Its residual is held to the same
+    // tolerance, first against the diagonal |X(1,1,1) − X(0,0,0)| ≤ size() (a cheaper bound, so
+    // that passing it passes the test with size()); a near-singular cell falls through to Newton.
+    if (Mat3 j; affineMap(mCorners, j)) {
+        const Vec3 r = j.inverse() * (x - mCorners[0]);
+        if (r.allFinite()) {
+            const double err = (map(r) - x).norm();
+            if (accept(r, err, tolerance * (mCorners[7] - mCorners[0]).norm()) ||
+                accept(r, err, tolerance * std::max(size(), std::numeric_limits<double>::min())))
+                return r.cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones());
+        }
+    }
     const double target = tolerance * std::max(size(), std::numeric_limits<double>::min());
     // Newton from one start; damped (the step is halved until the residual decreases) so that a
     // start in a fold does not jump out of the cell and diverge.
@@ -237,35 +267,18 @@ std::optional<Vec3> TrilinearCell::inverse(const Vec3& x, const Vec3& guess, dou
         }
         return {r, err};
     };
-    const auto accept = [&](const Vec3& r, double err) {
-        return err <= target && (r.array() >= -slack).all() && (r.array() <= 1 + slack).all();
-    };
     auto [r, err] = newton(guess, false);
-    if (accept(r, err)) return r.cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones());
+    if (accept(r, err, target)) return r.cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones());
     // Safe fallback: damped Newton from a grid of starts; keep the first that converges inside.
     for (int k = 0; k < 27; ++k) {
         const Vec3 start((k % 3 + 0.5) / 3, (k / 3 % 3 + 0.5) / 3, (k / 9 + 0.5) / 3);
         auto [rk, ek] = newton(start, true);
-        if (accept(rk, ek)) return rk.cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones());
+        if (accept(rk, ek, target)) return rk.cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones());
     }
     return std::nullopt;
 }
 
 namespace {
-
-// The cell's map when it is affine (every mixed term of the trilinear map exactly zero: a
-// parallelepiped, as a flat face under a shell along its constant normal makes), as its origin
-// corner and Jacobian; false otherwise.
-bool affineMap(const std::array<Vec3, 8>& c, Mat3& j) {
-    // X = c0 + u·a + v·b + w·e + uv·(c3 − c1 − c2 + c0) + uw·(…) + vw·(…) + uvw·(…)
-    const bool affine = (c[3] - c[1] - c[2] + c[0]).isZero(0) && (c[5] - c[1] - c[4] + c[0]).isZero(0) &&
-                        (c[6] - c[2] - c[4] + c[0]).isZero(0) && (c[7] - c[3] - c[5] + c[1]).isZero(0);
-    if (!affine) return false;
-    j.col(0) = c[1] - c[0];
-    j.col(1) = c[2] - c[0];
-    j.col(2) = c[4] - c[0];
-    return true;
-}
 
 // cellSpans for an affine cell: the slab test in cell coordinates, a fourth of the six patch
 // tests' instructions (callgrind on the bush field's middle view: 470 per cell, 1 770 before). The same spans up to rounding:

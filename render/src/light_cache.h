@@ -86,20 +86,21 @@ public:
         const double gu = std::clamp(r.x(), 0.0, 1.0) * g.nu, gv = std::clamp(r.y(), 0.0, 1.0) * g.nv,
                      gw = std::clamp(r.z(), 0.0, 1.0) * g.nw;
         const int iu = std::min(int(gu), g.nu - 1), iv = std::min(int(gv), g.nv - 1), iw = std::min(int(gw), g.nw - 1);
-        const double f[3] = {gu - iu, gv - iv, gw - iw};
+        const double wu[2] = {1 - (gu - iu), gu - iu}, wv[2] = {1 - (gv - iv), gv - iv}, ww[2] = {1 - (gw - iw), gw - iw};
+        const std::size_t strideV = std::size_t(g.nu + 1), strideW = strideV * std::size_t(g.nv + 1);
+        const std::size_t base = std::size_t(iw) * strideW + std::size_t(iv) * strideV + std::size_t(iu);
         double out = 0;
         for (int c = 0; c < 8; ++c) {
             const int du = c & 1, dv = (c >> 1) & 1, dw = c >> 2;
-            const double weight = (du ? f[0] : 1 - f[0]) * (dv ? f[1] : 1 - f[1]) * (dw ? f[2] : 1 - f[2]);
+            const double weight = wu[du] * wv[dv] * ww[dw];
             if (!(weight > 0)) continue;  // a node that does not count is not computed
-            const std::size_t index =
-                (std::size_t(iw + dw) * std::size_t(g.nv + 1) + std::size_t(iv + dv)) * std::size_t(g.nu + 1) + std::size_t(iu + du);
+            const std::size_t index = base + std::size_t(du) + std::size_t(dv) * strideV + std::size_t(dw) * strideW;
             // A node holds the optical depth −ln T toward the light, and that is what is
             // interpolated: along the light a bush's transmittance falls exponentially, a convex
             // function that linear interpolation of T would overestimate everywhere between the
             // nodes (on the bush field +1 % in the mean).
             float depth = values[index].load(std::memory_order_relaxed);
-            if (std::isnan(depth)) {
+            if (std::isnan(depth)) [[unlikely]] {
                 const double t = fill(Vec3(double(iu + du) / g.nu, double(iv + dv) / g.nv, double(iw + dw) / g.nw));
                 depth = float(-std::log(std::max(t, kDarkest)));
                 values[index].store(depth, std::memory_order_relaxed);

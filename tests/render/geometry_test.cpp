@@ -292,33 +292,45 @@ TEST(Cell, InverseMapRefusesPointsOutside) {
     EXPECT_FALSE(off);
 }
 
-// A cell whose trilinear map is affine (a parallelepiped: a flat parallelogram face under a shell
-// along one constant normal) takes the slab test instead of the six patch tests; it must give what
-// the patch tests give. The oracle: the same cell with one top corner moved by 1e-13 of its size,
-// which makes it trilinear and so takes the patch tests. Rays aimed in and around random
-// parallelepipeds (sheared, tilted, scaled), from outside and from inside.
+// A random parallelepiped cell (sheared, tilted, scaled; every fifth under its face) from dyadic
+// values, so that the corners' sums are exact and the trilinear map's mixed terms exactly zero,
+// and the same cell with one top corner moved by 1e-13 of its size, which makes it trilinear: the
+// oracle for what the affine fast paths must give. `s`: the cell's scale.
+struct AffinePair {
+    TrilinearCell affine, trilinear;
+    double s;
+    bool exactlyAffine() const {
+        const auto& c = affine.corners();
+        return (c[3] - c[1] - c[2] + c[0]).isZero(0) && (c[5] - c[1] - c[4] + c[0]).isZero(0) &&
+               (c[6] - c[2] - c[4] + c[0]).isZero(0) && (c[7] - c[3] - c[5] + c[1]).isZero(0);
+    }
+};
+AffinePair randomParallelepiped(std::mt19937& rng, int k) {
+    std::uniform_real_distribution<double> uniform(-1, 1), scale(0.2, 3);
+    const auto u = [&] { return std::round(uniform(rng) * 256) / 256; };
+    const double s = std::round(scale(rng) * 16) / 16;
+    const Vec3 a = s * (Vec3(1, 0, 0) + 0.25 * Vec3(u(), u(), u()));
+    const Vec3 b = s * (Vec3(0, 1, 0) + 0.25 * Vec3(u(), u(), u()));
+    const Vec3 base = 4 * Vec3(u(), u(), u());
+    const Vec3 normal = Vec3(0.375 * u(), 0.375 * u(), 1);
+    const double h = s * (0.25 + std::abs(u()));
+    const std::array<Vec3, 4> p = {base, base + a, base + b, base + a + b};
+    const std::array<Vec3, 4> n = {normal, normal, normal, normal};
+    std::array<Vec3, 4> q = p;
+    q[3] += 1e-13 * s * Vec3(1, 1, 1);
+    return {TrilinearCell(p, n, h, k % 5 == 0), TrilinearCell(q, n, h, k % 5 == 0), s};
+}
+
+// A cell whose trilinear map is affine takes the slab test instead of the six patch tests; it must
+// give what the patch tests give on the perturbed (trilinear) cell. Rays aimed in and around random
+// parallelepipeds, from outside and from inside.
 TEST(Cell, AffineCellsTakeTheSlabTestWithTheSameSpans) {
     std::mt19937 rng(31);
-    std::uniform_real_distribution<double> uniform(-1, 1), aim(-0.3, 1.3), scale(0.2, 3);
-    // Dyadic values, so that the corners' sums are exact and the mixed terms exactly zero.
-    const auto u = [&](std::mt19937& r) { return std::round(uniform(r) * 256) / 256; };
+    std::uniform_real_distribution<double> aim(-0.3, 1.3);
     int compared = 0, hits = 0, exactlyAffine = 0;
     for (int k = 0; k < 3000; ++k) {
-        const double s = std::round(scale(rng) * 16) / 16;
-        const Vec3 a = s * (Vec3(1, 0, 0) + 0.25 * Vec3(u(rng), u(rng), u(rng)));
-        const Vec3 b = s * (Vec3(0, 1, 0) + 0.25 * Vec3(u(rng), u(rng), u(rng)));
-        const Vec3 base = 4 * Vec3(u(rng), u(rng), u(rng));
-        const Vec3 normal = Vec3(0.375 * u(rng), 0.375 * u(rng), 1);
-        const double h = s * (0.25 + std::abs(u(rng)));
-        const std::array<Vec3, 4> p = {base, base + a, base + b, base + a + b};
-        const std::array<Vec3, 4> n = {normal, normal, normal, normal};
-        const TrilinearCell affine(p, n, h, k % 5 == 0);
-        const auto& c = affine.corners();
-        exactlyAffine += (c[3] - c[1] - c[2] + c[0]).isZero(0) && (c[5] - c[1] - c[4] + c[0]).isZero(0) &&
-                         (c[6] - c[2] - c[4] + c[0]).isZero(0) && (c[7] - c[3] - c[5] + c[1]).isZero(0);
-        std::array<Vec3, 4> q = p;
-        q[3] += 1e-13 * s * Vec3(1, 1, 1);
-        const TrilinearCell trilinear(q, n, h, k % 5 == 0);
+        const auto [affine, trilinear, s] = randomParallelepiped(rng, k);
+        exactlyAffine += AffinePair{affine, trilinear, s}.exactlyAffine();
         const Vec3 target = affine.map(Vec3(aim(rng), aim(rng), aim(rng)));
         const Vec3 o = k % 4 == 0 ? affine.map(Vec3(0.5, 0.5, 0.5)) : target + 4 * s * randomUnit(rng);
         const Vec3 d = k % 4 == 0 ? randomUnit(rng) : Vec3((target - o).normalized());
@@ -340,4 +352,34 @@ TEST(Cell, AffineCellsTakeTheSlabTestWithTheSameSpans) {
     EXPECT_EQ(compared, 3000);
     EXPECT_GT(exactlyAffine, 2900);  // the slab test is what is tested
     EXPECT_GT(hits, 1500);
+}
+
+// An affine cell's inverse map is one linear solve instead of Newton's iterations; it must find
+// what Newton finds on the perturbed (trilinear) cell, and refuse what Newton refuses: points
+// inside, on the faces and outside random parallelepipeds.
+TEST(Cell, AffineCellsInvertByOneSolveAsNewtonDoes) {
+    std::mt19937 rng(37);
+    std::uniform_real_distribution<double> inside(0, 1), around(-0.2, 1.2);
+    int found = 0, refused = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const AffinePair pair = randomParallelepiped(rng, k);
+        ASSERT_TRUE(pair.exactlyAffine()) << k;
+        Vec3 r(inside(rng), inside(rng), inside(rng));
+        if (k % 3 == 1) r[k % 2 ? 0 : 2] = double(k % 4 == 1);  // on a face
+        if (k % 3 == 2) r = Vec3(around(rng), around(rng), around(rng));
+        const Vec3 x = pair.affine.map(r);
+        const auto fast = pair.affine.inverse(x), slow = pair.trilinear.inverse(x);
+        ASSERT_EQ(bool(fast), bool(slow)) << k;
+        if (!fast) {
+            ++refused;
+            continue;
+        }
+        ++found;
+        EXPECT_LT((*fast - *slow).norm(), 1e-9) << k;
+        // Within the cell the solve is exact up to rounding (outside, within the slack, both clamp).
+        if ((r.array() >= 0).all() && (r.array() <= 1).all())
+            EXPECT_LT((pair.affine.map(*fast) - x).norm(), 1e-12 * pair.s * 8) << k;
+    }
+    EXPECT_GT(found, 1400);
+    EXPECT_GT(refused, 300);
 }
