@@ -73,6 +73,7 @@ public:
     struct SpanFrame {
         Vec3 light;  ///< unit, tiled reference space
         double scale;  ///< the local scale at the span's middle
+        int level = -1;  ///< the shadow level when the caller knows it (−1: chosen from width)
     };
     double nearAndCachedShadow(int slot, const Prim& prim, const Vec3& r, const Vec3& l, double width,
                                Counters& counters, const SpanFrame* span = nullptr) const {
@@ -89,7 +90,8 @@ public:
             if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l, 0, &prim);
             lr /= len;
         }
-        const int level = shadowLevel(texel, width / (span ? span->scale : localScale(prim, r)));
+        const int level =
+            span && span->level >= 0 ? span->level : shadowLevel(texel, width / (span ? span->scale : localScale(prim, r)));
         const double maxStep = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
         const CellSegment near = segmentInCell(prim, r, lr, maxStep);
         if (near.exitFace == 0) return 0;  // the base surface blocks

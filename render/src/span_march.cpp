@@ -101,6 +101,21 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
     const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
     double reusedShare = 0;
     const double tau = texel.tauAt(level);
+    // The shadow queries' cone width grows linearly along the span, and their level with it
+    // (monotonically): when both ends of the span take the same level, every query does, and
+    // the level is chosen once instead of per query (a logarithm each).
+    const auto shadowWidth = [&](double sm) {
+        return kShadowConeScale * mConeSpread * (span.tIn + (span.tOut - span.tIn) * (sm / span.length));
+    };
+    // Taken at the march's first query (−2: not yet).
+    int spanShadowLevel = -2;
+    const auto constantShadowLevel = [&] {
+        if (spanShadowLevel == -2) {
+            const int first = mShadows.shadowLevel(texel, shadowWidth(0) / span.scale);
+            spanShadowLevel = first == mShadows.shadowLevel(texel, shadowWidth(span.length) / span.scale) ? first : -1;
+        }
+        return spanShadowLevel;
+    };
     counters.voxels += detail::march(*texel.volume, level, span.p0, span.dir, span.length,
         [&](const GridVoxel& voxel, double s, double ds) {
             const primitive::SggxMatrix& sMatrix = voxel.s;
@@ -151,11 +166,10 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                     if (nearest >= 0) {
                         ml.shadow = track.t[std::size_t(nearest)];
                     } else {
-                        const double width =
-                            kShadowConeScale * mConeSpread * (span.tIn + (span.tOut - span.tIn) * (sm / span.length));
+                        const double width = shadowWidth(sm);
                         const Vec3 rc = cellPoint();
                         if (sl.latticeSlot >= 0) {
-                            const ShadowQueries::SpanFrame frame{sl.lr, span.scale};
+                            const ShadowQueries::SpanFrame frame{sl.lr, span.scale, constantShadowLevel()};
                             ml.shadow = mShadows.nearAndCachedShadow(sl.latticeSlot, span.prim, rc, lw, width, counters, &frame);
                         } else {
                             ml.shadow = mShadows.shadowTransmittance(worldPoint(), lw, distance, width, &span.prim, rc, counters);
