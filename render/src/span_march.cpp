@@ -129,7 +129,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
             // Reflectance reuse (RenderOptions::approximations.reflectanceReuseWeight): a voxel
             // with a tiny share of the pixel takes the march's last reflectance for its light.
             const double share = span.startT * r.transmittance * alpha * blendWeight;
-            const bool reuse = share < reuseWeight && reusedShare + share <= 10 * reuseWeight;
+            const bool reuse = share < reuseWeight && reusedShare + share <= ApproximationBudget::kReflectanceReuseBudget * reuseWeight;
             const double sm = s + 0.5 * ds;
             // The voxel's cell coordinates and world point: for point lights and shadow queries.
             const auto cellPoint = [&] {

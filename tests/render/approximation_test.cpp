@@ -1,6 +1,7 @@
 // The texel renderer's approximations as one budget (issue 12): exact() turns every one off, the
 // key names every value, and with the defaults the image mean on a bush field stays within the
 // 0.5 % an approximation on by default may move it.
+#include "bush_field.h"
 #include "fixtures.h"
 
 #include <vtex/render/compare.h>
@@ -67,4 +68,27 @@ TEST(Approximations, DefaultsMoveTheBushFieldMeanByAtMostHalfAPercent) {
               << "\n";
     for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(c.bias[std::size_t(k)]), 0.005) << "channel " << k;
     EXPECT_LT(approximate.stats.voxelsVisited, exact.stats.voxelsVisited);  // they do save work
+}
+
+// Reflectance reuse on a realistic scene: the bush field (bush_field.h) from the benchmark's
+// middle direction, defaults against every voxel evaluating its own reflectance. The worst pixel
+// stays within the bound (the reused shares' sum, kReflectanceReuseBudget × the weight, times the
+// largest radiance a voxel reflects), the mean moves by far less, and the reuse saves evaluations.
+TEST(Approximations, ReflectanceReuseStaysWithinItsBoundOnTheBushField) {
+    const Scene scene = bushField(Eigen::Vector3d(0.5 + 1.28, 0.5 - 2.21, 1.6), 96);
+    RenderOptions options;
+    const RenderResult reused = renderQuiet(scene, options);
+    options.approximations.reflectanceReuseWeight = 0;
+    const RenderResult exact = renderQuiet(scene, options);
+    const double bound = ApproximationBudget::kReflectanceReuseBudget * ApproximationBudget{}.reflectanceReuseWeight *
+                         largestPhongRadiance(scene.lights[0].color.maxCoeff(), scene.texels[0].material, 1.0f);
+    const double worst = maxAbsDifference(exact.image, reused.image);
+    const ImageComparison c = compareImages(reused.image, exact.image);
+    std::cout << "reflectance reuse on the bush field: worst pixel " << worst << " (bound " << bound << "), RMSE " << c.rmse
+              << ", bias " << 100 * c.bias[1] << " % (G), evaluations " << reused.stats.reflectanceEvaluations << " vs "
+              << exact.stats.reflectanceEvaluations << "\n";
+    EXPECT_GT(worst, 0);
+    EXPECT_LE(worst, bound);
+    for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(c.bias[std::size_t(k)]), 5e-4) << "channel " << k;
+    EXPECT_LT(double(reused.stats.reflectanceEvaluations), 0.8 * double(exact.stats.reflectanceEvaluations));
 }

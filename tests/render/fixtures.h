@@ -6,9 +6,11 @@
 #include <vtex/octree/voxel.h>
 #include <vtex/render/renderer.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <utility>
@@ -182,6 +184,20 @@ inline std::vector<std::pair<std::string, std::function<Scene()>>> extremeScenes
              return s;
          }},
     };
+}
+
+// The largest difference of one colour channel between two images of the same size.
+inline double maxAbsDifference(const Image& a, const Image& b) {
+    double worst = 0;
+    for (std::size_t i = 0; i < a.rgba.size(); ++i)
+        if (i % 4 != 3) worst = std::max(worst, double(std::abs(a.rgba[i] - b.rgba[i])));
+    return worst;
+}
+
+// The most radiance the Phong material m under irradiance e reflects: E·(kd·albedo/π + ks·(n+2)/2π).
+inline double largestPhongRadiance(double e, const Material& m, double albedo) {
+    return e * (m.diffuse.maxCoeff() * albedo / std::numbers::pi +
+                m.specular.maxCoeff() * (m.shininess + 2) / (2 * std::numbers::pi));
 }
 
 inline RenderResult renderQuiet(const Scene& scene, RenderOptions options = {}) {

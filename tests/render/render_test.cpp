@@ -76,20 +76,6 @@ Departure departure(const Image& approx, const Image& exact) {
             meanAbs(approx) / meanAbs(exact)};
 }
 
-// The largest difference of one colour channel between two images of the same size.
-double maxAbsDifference(const Image& a, const Image& b) {
-    double worst = 0;
-    for (std::size_t i = 0; i < a.rgba.size(); ++i)
-        if (i % 4 != 3) worst = std::max(worst, double(std::abs(a.rgba[i] - b.rgba[i])));
-    return worst;
-}
-
-// The most radiance the Phong material m under irradiance e reflects: E·(kd·albedo/π + ks·(n+2)/2π).
-double largestPhongRadiance(double e, const Material& m, double albedo) {
-    return e * (m.diffuse.maxCoeff() * albedo / std::numbers::pi +
-                m.specular.maxCoeff() * (m.shininess + 2) / (2 * std::numbers::pi));
-}
-
 // On failure: the two images as PNG in the build tree, for a look.
 std::string dumpImages(const std::string& name, const Image& a, const Image& b) {
     const std::filesystem::path dir = std::filesystem::path(VTEX_TEST_TMP) / "render";
@@ -398,7 +384,7 @@ TEST(Render, ReusedReflectanceStaysWithinItsBound) {
     float albedo = 0;
     for (const auto& level : scene.texels[0].octree->levels)
         for (const auto& node : level) albedo = std::max({albedo, node.data.albedo[0], node.data.albedo[1], node.data.albedo[2]});
-    const double bound = 10 * ApproximationBudget{}.reflectanceReuseWeight *
+    const double bound = ApproximationBudget::kReflectanceReuseBudget * ApproximationBudget{}.reflectanceReuseWeight *
                          largestPhongRadiance(scene.lights[0].color.maxCoeff(), scene.texels[0].material, albedo);
     const double worst = maxAbsDifference(exact.image, reused.image);
     std::cout << "reflectance reuse: worst pixel " << worst << " (bound " << bound << "), RMSE "

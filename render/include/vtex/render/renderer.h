@@ -87,9 +87,12 @@ struct ApproximationBudget {
     /// A voxel whose share of the pixel (transmittance in front of it × its opacity × its level's
     /// blend weight) is below this reuses the reflectance the march last evaluated for that
     /// light instead of evaluating its own, as long as the shares reused along the march add up
-    /// to at most 10× this: the pixel moves by at most that sum times the largest reflected
-    /// radiance (docs/render.md, "Shading"). 0: every voxel evaluates its own (exact).
-    double reflectanceReuseWeight = 1e-3;
+    /// to at most kReflectanceReuseBudget × this: the pixel moves by at most that sum (3 % of the
+    /// largest reflected radiance) (docs/render.md, "Shading"). 0: every voxel evaluates its own
+    /// (exact). 1e-2 since issue 12 (1e-3 with a budget of 10× before): on the bush field's
+    /// middle view 35 % fewer evaluations, image mean within 0.01 % of 1e-3's.
+    double reflectanceReuseWeight = 1e-2;
+    static constexpr double kReflectanceReuseBudget = 3;
     /// The base surface of a texel cell, seen through a transmittance at least this, casts exact
     /// shadow rays; seen through less, its shadows come from the cell's transmittance lattice
     /// (as a voxel's do), which moves the pixel by at most that transmittance times the floor's
