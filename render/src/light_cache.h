@@ -89,23 +89,34 @@ public:
         const double wu[2] = {1 - (gu - iu), gu - iu}, wv[2] = {1 - (gv - iv), gv - iv}, ww[2] = {1 - (gw - iw), gw - iw};
         const std::size_t strideV = std::size_t(g.nu + 1), strideW = strideV * std::size_t(g.nv + 1);
         const std::size_t base = std::size_t(iw) * strideW + std::size_t(iv) * strideV + std::size_t(iu);
-        double out = 0;
-        for (int c = 0; c < 8; ++c) {
-            const int du = c & 1, dv = (c >> 1) & 1, dw = c >> 2;
-            const double weight = wu[du] * wv[dv] * ww[dw];
-            if (!(weight > 0)) continue;  // a node that does not count is not computed
-            const std::size_t index = base + std::size_t(du) + std::size_t(dv) * strideV + std::size_t(dw) * strideW;
-            // A node holds the optical depth −ln T toward the light, and that is what is
-            // interpolated: along the light a bush's transmittance falls exponentially, a convex
-            // function that linear interpolation of T would overestimate everywhere between the
-            // nodes (on the bush field +1 % in the mean).
-            float depth = values[index].load(std::memory_order_relaxed);
-            if (std::isnan(depth)) [[unlikely]] {
-                const double t = fill(Vec3(double(iu + du) / g.nu, double(iv + dv) / g.nv, double(iw + dw) / g.nw));
-                depth = float(-std::log(std::max(t, kDarkest)));
-                values[index].store(depth, std::memory_order_relaxed);
+        const std::size_t offset[8] = {0, 1, strideV, strideV + 1, strideW, strideW + 1, strideW + strideV, strideW + strideV + 1};
+        double weight[8];
+        for (int c = 0; c < 8; ++c) weight[c] = wu[c & 1] * wv[(c >> 1) & 1] * ww[c >> 2];
+        // A node holds the optical depth −ln T toward the light, and that is what is
+        // interpolated: along the light a bush's transmittance falls exponentially, a convex
+        // function that linear interpolation of T would overestimate everywhere between the
+        // nodes (on the bush field +1 % in the mean). A node whose weight is 0 does not count and
+        // is not computed; missing nodes are filled first, then the sum is taken in one order.
+        const auto sum = [&](bool& missing) {
+            double out = 0;
+            for (int c = 0; c < 8; ++c) {
+                if (!(weight[c] > 0)) continue;
+                const float depth = values[base + offset[c]].load(std::memory_order_relaxed);
+                missing |= std::isnan(depth);
+                out += weight[c] * double(depth);
             }
-            out += weight * double(depth);
+            return out;
+        };
+        bool missing = false;
+        double out = sum(missing);
+        if (missing) [[unlikely]] {
+            for (int c = 0; c < 8; ++c) {
+                if (!(weight[c] > 0) || !std::isnan(values[base + offset[c]].load(std::memory_order_relaxed))) continue;
+                const int du = c & 1, dv = (c >> 1) & 1, dw = c >> 2;
+                const double t = fill(Vec3(double(iu + du) / g.nu, double(iv + dv) / g.nv, double(iw + dw) / g.nw));
+                values[base + offset[c]].store(float(-std::log(std::max(t, kDarkest))), std::memory_order_relaxed);
+            }
+            out = sum(missing);
         }
         return std::exp(-out);
     }
