@@ -15,6 +15,15 @@
 
 namespace vtex::render::detail {
 
+/// std::clamp(std::floor(x), −4e15, 4e15) in a few instructions: x86-64's baseline (SSE2) has no
+/// rounding instruction, and std::floor compiles to a long sequence there; within ±4e15 every
+/// double converts to an int64 exactly. x must not be NaN.
+inline double clampedFloor(double x) {
+    x = std::clamp(x, -4e15, 4e15);
+    const double t = double(std::int64_t(x));
+    return t > x ? t - 1 : t;
+}
+
 /// Marches p0 + s·dir, s ∈ [0, length] (reference units, dir unit), at `level`, calling
 /// visit(node, s0, ds) for every non-empty block in front-to-back order; visit returns false to
 /// stop. Returns the number of blocks stepped through (empty ones included). The walk for levels
@@ -103,7 +112,7 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
     };
     const auto locateAt = [&](double s) {
         const Eigen::Vector3d p = p0 + (s + std::min(nudge, 0.5 * (length - s))) * dir;
-        for (int a = 0; a < 3; ++a) idx[a] = std::int64_t(std::clamp(std::floor(p[a] * double(n)), -4e15, 4e15));
+        for (int a = 0; a < 3; ++a) idx[a] = std::int64_t(clampedFloor(p[a] * double(n)));
         idx[2] = std::clamp<std::int64_t>(idx[2], 0, n - 1);
         for (int a = 0; a < 3; ++a) next[a] = planeCrossing(a);
         // On the top or bottom layer, leaving the grid in z keeps the clamped layer (as

@@ -122,7 +122,7 @@ public:
         double exit = std::numeric_limits<double>::infinity();
         int face = -1;
         for (int a = 0; a < 3; ++a) {
-            f[a] = std::clamp(std::floor(p[a] * n), -4e15, 4e15);
+            f[a] = clampedFloor(p[a] * n);
             if (s.lr[a] == 0) continue;
             const double e = ((s.lr[a] > 0 ? f[a] + 1 : f[a]) * invN - p0[a]) * s.inverse[a];
             if (e < exit) {
@@ -141,7 +141,12 @@ public:
         // face's other two axes).
         const int u = (face + 1) % 3, v = (face + 2) % 3;
         const double fu = (p0[u] + exit * s.lr[u]) * n - f[u], fv = (p0[v] + exit * s.lr[v]) * n - f[v];
-        return std::exp(-own) * rest(s, volume, grid, tau, level, idx, face, step - exit, maxStep, fu, fv);
+        const Rest r = rest(s, volume, grid, tau, level, idx, face, step - exit, maxStep, fu, fv);
+        // exp(−own) · clamp(t · exp(−depth), 0, 1), with one exponential where the clamp cannot
+        // act: t · e^(−depth) ≤ 1 when t ≤ 1 and depth ≥ 0, or t ≤ 1 + depth ≤ e^depth.
+        if (!(r.t > 0)) return 0;
+        if (r.depth >= 0 ? r.t <= 1 : r.t <= 1 + r.depth) return r.t * std::exp(-(own + r.depth));
+        return std::exp(-own) * std::min(r.t * std::exp(-r.depth), 1.0);
     }
 
 private:
@@ -149,7 +154,13 @@ private:
         return tau * double(v.density) * v.s.projectedArea(lr);
     }
 
-    // The transmittance over `length` from (fu, fv) on the face of voxel idx (in the tile
+    // What rest() finds: the transmittance is t · exp(−depth), clamped to [0, 1].
+    struct Rest {
+        double t;      ///< the entry's marches interpolated where the query leaves
+        double depth;  ///< the optical depth by which the query's length differs from the entry's
+    };
+
+    // The transmittance (as a Rest) over `length` from (fu, fv) on the face of voxel idx (in the tile
     // [0, 1]²) that is perpendicular to axis `face` and toward the light. The entry holds the
     // transmittances of the marches from kSide × kSide points of the face (the middles of its
     // division) up to maxStep or the tile's sides, top or floor: interpolated bilinearly
@@ -164,7 +175,7 @@ private:
     // query and the entries, their lengths agree; where maxStep does, the query's is shorter by
     // its share in its own voxel (at most a voxel's chord), taken off at the extinction where the
     // face's middle march ends.
-    double rest(const Slot& s, const MarchVolume& volume, const LevelGrid& grid, double tau, int level,
+    Rest rest(const Slot& s, const MarchVolume& volume, const LevelGrid& grid, double tau, int level,
                 const std::uint32_t idx[3], int face, double length, double maxStep, double fu, double fv) const {
         const double invN = 1 / double(grid.n);
         const int u = (face + 1) % 3, v = (face + 2) % 3;
@@ -177,19 +188,19 @@ private:
         // Bilinear between the nearest four march points (extended linearly to the face's edges).
         const auto cellOf = [](double f, int& i0, double& w) {
             const double g = std::clamp(f, 0.0, 1.0) * kSide - 0.5;  // in march-point units
-            i0 = std::clamp(int(std::floor(g)), 0, kSide - 2);
+            i0 = std::clamp(int(clampedFloor(g)), 0, kSide - 2);
             w = g - i0;
         };
         int iu, iv;
         double wu, wv;
         cellOf(fu, iu, wu);
         cellOf(fv, iv, wv);
-        double t = 0;
-        for (int k = 0; k < 4; ++k) {
-            const int a = iu + (k & 1), b = iv + (k >> 1);
-            t += ((k & 1) ? wu : 1 - wu) * ((k & 2) ? wv : 1 - wv) *
-                 double(values[1 + b * kSide + a].load(std::memory_order_relaxed));
-        }
+        const std::atomic<float>* corner = values + 1 + iv * kSide + iu;
+        const auto at = [&](int k) { return double(corner[k].load(std::memory_order_relaxed)); };
+        double t = (1 - wu) * (1 - wv) * at(0);
+        t += wu * (1 - wv) * at(1);
+        t += (1 - wu) * wv * at(kSide);
+        t += wu * wv * at(kSide + 1);
         // The entries' lengths, where the query leaves: the distance to the tile's sides, top or
         // floor along the light is affine in the start, so bilinear interpolation of the march
         // points' lengths is that distance at the exit point itself, capped at maxStep.
@@ -197,7 +208,7 @@ private:
         from[v] += (fv - 0.5) * invN;
         const double entryLength = std::min(maxStep, tileExit(s, from));
         const double endSigma = double(values[0].load(std::memory_order_relaxed));
-        return std::clamp(t * std::exp(-endSigma * (length - entryLength)), 0.0, 1.0);
+        return {t, endSigma * (length - entryLength)};
     }
 
     // The distance from x (in the tile [0, 1]²) along the slot's direction to the tile's sides,
