@@ -82,7 +82,7 @@ private:
     double mLobeRatio = 0;
     /// Strategy B's half vectors in (wk, wj, wi) and their (N·l) cosⁿα; 0 for those facing
     /// away from v, whose normal is then v.
-    alignas(16) std::array<double, kLobeSamples> mLobeX{}, mLobeY{}, mLobeZ{}, mLobeTerm{};
+    alignas(16) std::array<double, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe
     int mLobeCount = 0;  ///< how many face v
 };
 
