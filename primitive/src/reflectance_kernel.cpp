@@ -46,6 +46,7 @@ struct LobeLattice {
     static constexpr int kCount = ReflectanceKernel::kLobeSamples;
     double shininess = -1;
     std::array<double, kCount> x{}, y{}, z{}, cosPower{};  ///< r = (sin α cos φ, sin α sin φ, cos α); cosⁿα
+    double fibreGate = 0;  ///< detail::fibreEigenRatioGate(n): a pow, so kept with the lobe's points
     static const LobeLattice& forShininess(double n) {
         thread_local LobeLattice cached;
         if (cached.shininess != n) {
@@ -59,6 +60,7 @@ struct LobeLattice {
                 cached.z[k] = cosAlpha;
                 cached.cosPower[k] = std::pow(xi, n / (n + 1));  // cosⁿα
             }
+            cached.fibreGate = detail::fibreEigenRatioGate(n);
             cached.shininess = n;
         }
         return cached;
@@ -176,6 +178,7 @@ void ReflectanceKernel::setUpLobe() {
     }
 #endif
     mLobeRatio = double(kLobeSamples) / mLattice->n * 2 * (mShininess + 1);
+    mFibreGate = lobe.fibreGate;
 }
 
 // Strategy B's sum: each half vector's pre-image q = C⁻¹N (back substitution), at which A's
@@ -262,7 +265,7 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
         // lobe crosses its circle of normals; the fibre limit integrates along that circle.
         Eigen::Matrix3d sFrame;
         sFrame << Skk, Skj, Ski, Skj, Sjj, Sji, Ski, Sji, Sii;
-        fibre = detail::fibreSpecular(sFrame, mLight.cast<double>(), Vector3d(0, 0, 1), mShininess, mCosCutoff,
+        fibre = detail::fibreSpecular(sFrame, mLight.cast<double>(), Vector3d(0, 0, 1), mShininess, mFibreGate, mCosCutoff,
                                       [this](detail::FibreLanes& c) { powers(c); });
     }
     const bool mis = mSpecular && !fibre && mLobeCount > 0 && detC > 0;

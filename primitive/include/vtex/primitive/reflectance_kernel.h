@@ -36,7 +36,8 @@ namespace vtex::primitive {
 /// the Jacobian from u to N is |det C| / |C u|³. B's directions depend on (l, v, shininess)
 /// alone and are set up once per kernel. A needle much thinner than the lobe defeats both (its
 /// normals lie on a circle that the lobe crosses on a short arc): when its axis ratio is below
-/// kFibreGate (0.15) times the lobe's width 1/√(n+1), the specular factor is instead the limit
+/// 0.105 (n+1)^0.3 times the lobe's width 1/√(n+1) (where the two estimators' errors cross,
+/// src/fibre_specular.h), the specular factor is instead the limit
 /// of an ideal fibre of elliptic cross-section, an 8- or 16-node quadrature along that circle
 /// (src/fibre_specular.h), skipped when the fibre's highlight cone misses v by more than the
 /// Phong cut-off (then every term is below 1e-6 of the lobe's peak). Errors against the paper's integration are measured
@@ -80,6 +81,7 @@ private:
     /// (K_B / K_A) · 2(n+1): the ratio of B's density to A's at a lattice point is this times
     /// |det C| (N·l) cosⁿα / (w |C u|³), w the point's height on the disc's hemisphere.
     double mLobeRatio = 0;
+    double mFibreGate = 0;  ///< the largest λ₁/λ₂ the fibre limit takes (src/fibre_specular.h)
     /// Strategy B's half vectors in (wk, wj, wi) and their (N·l) cosⁿα; 0 for those facing
     /// away from v, whose normal is then v.
     alignas(16) std::array<double, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe
