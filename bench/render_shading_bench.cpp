@@ -71,6 +71,19 @@ void BM_ReflectanceFast(benchmark::State& state) {
 }
 BENCHMARK(BM_ReflectanceFast)->Arg(40)->Arg(15);  // shininess 20 (the scene default) and 7.5
 
+// A material without specular colour (the default): the kernel skips the Phong lobe's points
+// and the fibre, so this must cost what the lattice alone did.
+void BM_ReflectanceFastDiffuse(benchmark::State& state) {
+    const Cases& c = cases();
+    const double shininess = double(state.range(0)) / 2;
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const std::size_t k = i++ & (kCases - 1);
+        benchmark::DoNotOptimize(reflectanceFast(c.s[k], c.light[k], c.view[k], shininess, 16, false));
+    }
+}
+BENCHMARK(BM_ReflectanceFastDiffuse)->Arg(40);
+
 // The renderer's case: one kernel per (l, v) along a ray segment, only S changes per call. The
 // same 1024 (S, l, v) as above, with the kernels built before timing.
 void BM_ReflectanceKernel(benchmark::State& state) {

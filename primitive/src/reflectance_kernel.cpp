@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <utility>
 
@@ -44,19 +45,22 @@ namespace {
 struct LobeLattice {
     static constexpr int kCount = ReflectanceKernel::kLobeSamples;
     double shininess = -1;
-    std::array<double, kCount> cosAlpha{}, sinAlpha{}, cosPower{}, cosPhi{}, sinPhi{};
+    std::array<double, kCount> x{}, y{}, z{}, cosPower{};  ///< r = (sin α cos φ, sin α sin φ, cos α); cosⁿα
+    double fibreGate = 0;  ///< detail::fibreEigenRatioGate(n): a pow, so kept with the lobe's points
     static const LobeLattice& forShininess(double n) {
         thread_local LobeLattice cached;
         if (cached.shininess != n) {
             const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
             for (std::size_t k = 0; k < std::size_t(kCount); ++k) {
                 const double xi = (double(k) + 0.5) / kCount;
-                cached.cosAlpha[k] = std::pow(xi, 1 / (n + 1));
-                cached.sinAlpha[k] = std::sqrt(std::max(0.0, 1 - cached.cosAlpha[k] * cached.cosAlpha[k]));
+                const double cosAlpha = std::pow(xi, 1 / (n + 1));
+                const double sinAlpha = std::sqrt(std::max(0.0, 1 - cosAlpha * cosAlpha));
+                cached.x[k] = sinAlpha * std::cos(golden * double(k));
+                cached.y[k] = sinAlpha * std::sin(golden * double(k));
+                cached.z[k] = cosAlpha;
                 cached.cosPower[k] = std::pow(xi, n / (n + 1));  // cosⁿα
-                cached.cosPhi[k] = std::cos(golden * double(k));
-                cached.sinPhi[k] = std::sin(golden * double(k));
             }
+            cached.fibreGate = detail::fibreEigenRatioGate(n);
             cached.shininess = n;
         }
         return cached;
@@ -85,6 +89,23 @@ double ReflectanceKernel::power(double c) const {
         c *= c;
     }
     return result;
+}
+
+// cⁿ lane by lane: by squaring for a whole n (a loop the compiler vectorises), else libm's pow
+// where the lane counts (c > 0).
+void ReflectanceKernel::powers(detail::FibreLanes& c) const {
+    if (mWholePower < 0) {
+        for (float& x : c) x = x > 0 ? float(std::pow(double(x), mShininess)) : 0.0f;
+        return;
+    }
+    detail::FibreLanes result;
+    result.fill(1.0f);
+    for (int e = mWholePower; e > 0; e >>= 1) {
+        if (e & 1)
+            for (std::size_t k = 0; k < c.size(); ++k) result[k] *= c[k];
+        for (float& x : c) x *= x;
+    }
+    c = result;
 }
 
 ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view, double shininess, int samples,
@@ -121,22 +142,83 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
 }
 
 // Strategy B: the half vector between l and each of the lobe's mirror directions r (in the
-// kernel's frame, where v = (0, 0, 1)); those facing away from v see nothing and are dropped.
+// kernel's frame, where v = (0, 0, 1)); those facing away from v see nothing: their term is 0
+// (and their normal v, which keeps the weights' arithmetic finite).
 void ReflectanceKernel::setUpLobe() {
     const LobeLattice& lobe = LobeLattice::forShininess(mShininess);
-    const Vector3d l = mLight.cast<double>();
-    for (std::size_t k = 0; k < std::size_t(kLobeSamples); ++k) {
-        const Vector3d r(lobe.sinAlpha[k] * lobe.cosPhi[k], lobe.sinAlpha[k] * lobe.sinPhi[k], lobe.cosAlpha[k]);
-        const Vector3d sum = l + r;
-        const double length = sum.norm();
-        if (!(length > 1e-12)) continue;
-        const Vector3d n = sum / length;
-        if (!(n.z() > 0)) continue;
-        mLobeNormal[std::size_t(mLobeCount)] = n;
-        mLobeTerm[std::size_t(mLobeCount)] = n.dot(l) * lobe.cosPower[k];
-        ++mLobeCount;
+    const double lx = mLight.x(), ly = mLight.y(), lz = mLight.z();
+#if defined(__SSE2__)
+    // Two points at a time: this runs once per kernel, but reflectanceFast builds one per call.
+    const __m128d vlx = _mm_set1_pd(lx), vly = _mm_set1_pd(ly), vlz = _mm_set1_pd(lz);
+    const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1), tiny = _mm_set1_pd(1e-24);
+    for (std::size_t k = 0; k < std::size_t(kLobeSamples); k += 2) {
+        const __m128d x = _mm_add_pd(vlx, _mm_loadu_pd(&lobe.x[k])), y = _mm_add_pd(vly, _mm_loadu_pd(&lobe.y[k]));
+        const __m128d z = _mm_add_pd(vlz, _mm_loadu_pd(&lobe.z[k]));
+        const __m128d length2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)), _mm_mul_pd(z, z));
+        const __m128d faces = _mm_and_pd(_mm_cmpgt_pd(length2, tiny), _mm_cmpgt_pd(z, zero));
+        const __m128d inverse = _mm_and_pd(faces, _mm_div_pd(one, _mm_sqrt_pd(_mm_max_pd(length2, tiny))));
+        _mm_store_pd(&mLobeX[k], _mm_mul_pd(x, inverse));
+        _mm_store_pd(&mLobeY[k], _mm_mul_pd(y, inverse));
+        _mm_store_pd(&mLobeZ[k], _mm_or_pd(_mm_and_pd(faces, _mm_mul_pd(z, inverse)), _mm_andnot_pd(faces, one)));
+        const __m128d nl = _mm_mul_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(x, vlx), _mm_mul_pd(y, vly)), _mm_mul_pd(z, vlz)), inverse);
+        _mm_store_pd(&mLobeTerm[k], _mm_mul_pd(nl, _mm_loadu_pd(&lobe.cosPower[k])));
+        mLobeCount += (_mm_movemask_pd(faces) & 1) + (_mm_movemask_pd(faces) >> 1);
     }
+#else
+    for (std::size_t k = 0; k < std::size_t(kLobeSamples); ++k) {
+        const double x = lx + lobe.x[k], y = ly + lobe.y[k], z = lz + lobe.z[k];
+        const double length = std::sqrt(x * x + y * y + z * z);
+        const bool faces = length > 1e-12 && z > 0;
+        const double inverse = faces ? 1 / length : 0;
+        mLobeX[k] = x * inverse;
+        mLobeY[k] = y * inverse;
+        mLobeZ[k] = faces ? z * inverse : 1;
+        mLobeTerm[k] = (x * lx + y * ly + z * lz) * inverse * lobe.cosPower[k];
+        mLobeCount += faces;
+    }
+#endif
     mLobeRatio = double(kLobeSamples) / mLattice->n * 2 * (mShininess + 1);
+    mFibreGate = lobe.fibreGate;
+}
+
+// Strategy B's sum: each half vector's pre-image q = C⁻¹N (back substitution), at which A's
+// density is (q_z/|q|)/π and B's is (n+1)/2π cosⁿα 4(N·l) · |det C| |q|³; term / (1 + ratio)
+// with ratio = K term |det C| |q|⁴ / q_z, written with one division. Two points at a time in
+// double precision: |q|⁴ reaches 1e16 on needles at the axis-ratio floor.
+double ReflectanceKernel::lobeSum(double mkx, double mjx, double mjy, const Vector3d& Mi, double detC) const {
+    const double inverseK = 1 / mkx, inverseJ = 1 / mjy, inverseI = 1 / Mi.z();
+    const double factor = mLobeRatio * detC;
+#if defined(__SSE2__)
+    const __m128d ik = _mm_set1_pd(inverseK), ij = _mm_set1_pd(inverseJ), ii = _mm_set1_pd(inverseI);
+    const __m128d mix = _mm_set1_pd(Mi.x()), miy = _mm_set1_pd(Mi.y()), jx = _mm_set1_pd(mjx);
+    const __m128d f = _mm_set1_pd(factor), infinity = _mm_set1_pd(std::numeric_limits<double>::infinity());
+    const __m128d absMask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
+    __m128d sum = _mm_setzero_pd();
+    for (std::size_t k = 0; k < std::size_t(kLobeSamples); k += 2) {
+        const __m128d qz = _mm_mul_pd(_mm_load_pd(&mLobeZ[k]), ii);
+        const __m128d qy = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(&mLobeY[k]), _mm_mul_pd(miy, qz)), ij);
+        const __m128d qx = _mm_mul_pd(_mm_sub_pd(_mm_sub_pd(_mm_load_pd(&mLobeX[k]), _mm_mul_pd(jx, qy)), _mm_mul_pd(mix, qz)), ik);
+        const __m128d q2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(qx, qx), _mm_mul_pd(qy, qy)), _mm_mul_pd(qz, qz));
+        const __m128d term = _mm_load_pd(&mLobeTerm[k]);
+        const __m128d c = _mm_div_pd(_mm_mul_pd(term, qz), _mm_add_pd(qz, _mm_mul_pd(_mm_mul_pd(f, term), _mm_mul_pd(q2, q2))));
+        // Overflow on a degenerate S counts nothing (an ordered, finite contribution only).
+        sum = _mm_add_pd(sum, _mm_and_pd(_mm_cmplt_pd(_mm_and_pd(c, absMask), infinity), c));
+    }
+    alignas(16) double halves[2];
+    _mm_store_pd(halves, sum);
+    return halves[0] + halves[1];
+#else
+    double sum = 0;
+    for (std::size_t k = 0; k < std::size_t(kLobeSamples); ++k) {
+        const double qz = mLobeZ[k] * inverseI;
+        const double qy = (mLobeY[k] - Mi.y() * qz) * inverseJ;
+        const double qx = (mLobeX[k] - mjx * qy - Mi.x() * qz) * inverseK;
+        const double q2 = qx * qx + qy * qy + qz * qz, term = mLobeTerm[k];
+        const double contribution = term * qz / (qz + factor * term * q2 * q2);
+        if (std::isfinite(contribution)) sum += contribution;
+    }
+    return sum;
+#endif
 }
 
 ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
@@ -183,8 +265,8 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
         // lobe crosses its circle of normals; the fibre limit integrates along that circle.
         Eigen::Matrix3d sFrame;
         sFrame << Skk, Skj, Ski, Skj, Sjj, Sji, Ski, Sji, Sii;
-        fibre = detail::fibreSpecular(sFrame, mLight.cast<double>(), Vector3d(0, 0, 1), mShininess,
-                                      [this](double c) { return power(c); });
+        fibre = detail::fibreSpecular(sFrame, mLight.cast<double>(), Vector3d(0, 0, 1), mShininess, mFibreGate, mCosCutoff,
+                                      [this](detail::FibreLanes& c) { powers(c); });
     }
     const bool mis = mSpecular && !fibre && mLobeCount > 0 && detC > 0;
     const double lobeRatio = mis ? mLobeRatio * detC / (scale * scale * scale) : 0;
@@ -192,23 +274,7 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
     if (!mSpecular) return {diffuse * mDiffuseScale, 0};
     if (fibre) return {diffuse * mDiffuseScale, *fibre};
     double specular = latticeSpecular;
-    if (mis) {
-        // Strategy B: each half vector's pre-image q = C⁻¹N (back substitution), at which A's
-        // density is (q_z/|q|)/π and B's is (n+1)/2π cosⁿα 4(N·l) · |det C| |q|³.
-        // term / (1 + ratio) with ratio = K term |det C| |q|⁴ / q_z, written with one division.
-        const double inverseK = 1 / Mk.x(), inverseJ = 1 / Mj.y(), inverseI = 1 / Mi.z();
-        const double factor = mLobeRatio * detC;
-        for (std::size_t k = 0; k < std::size_t(mLobeCount); ++k) {
-            const Vector3d& n = mLobeNormal[k];
-            const double qz = n.z() * inverseI;
-            const double qy = (n.y() - Mi.y() * qz) * inverseJ;
-            const double qx = (n.x() - Mj.x() * qy - Mi.x() * qz) * inverseK;
-            const double q2 = qx * qx + qy * qy + qz * qz;
-            const double term = mLobeTerm[k];
-            const double contribution = term * qz / (qz + factor * term * q2 * q2);
-            if (std::isfinite(contribution)) specular += contribution;
-        }
-    }
+    if (mis) specular += lobeSum(Mk.x(), Mj.x(), Mj.y(), Mi, detC);
     return {diffuse * mDiffuseScale, specular * mSpecularScale};
 }
 

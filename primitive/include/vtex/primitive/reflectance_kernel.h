@@ -36,9 +36,11 @@ namespace vtex::primitive {
 /// the Jacobian from u to N is |det C| / |C u|³. B's directions depend on (l, v, shininess)
 /// alone and are set up once per kernel. A needle much thinner than the lobe defeats both (its
 /// normals lie on a circle that the lobe crosses on a short arc): when its axis ratio is below
-/// kFibreGate (0.15) times the lobe's width 1/√(n+1), the specular factor is instead the limit
+/// 0.105 (n+1)^0.3 times the lobe's width 1/√(n+1) (where the two estimators' errors cross,
+/// src/fibre_specular.h), the specular factor is instead the limit
 /// of an ideal fibre of elliptic cross-section, an 8- or 16-node quadrature along that circle
-/// (src/fibre_specular.h). Errors against the paper's integration are measured
+/// (src/fibre_specular.h), skipped when the fibre's highlight cone misses v by more than the
+/// Phong cut-off (then every term is below 1e-6 of the lobe's peak). Errors against the paper's integration are measured
 /// by bench/vtex_specular_estimators, per family of shapes and shininess (docs/micro-primitive.md).
 ///
 /// Along one ray segment v is constant, and so is l for a directional light, while S changes
@@ -62,7 +64,9 @@ private:
     void setUpLobe();
     std::pair<double, double> latticeSums(const Eigen::Vector3d& mk, const Eigen::Vector3d& mj, const Eigen::Vector3d& mi,
                                           double scale, double lobeRatio, bool wantSpecular) const;
-    double power(double c) const;  ///< cⁿ: by squaring for a whole n ≤ 1024
+    double lobeSum(double mkx, double mjx, double mjy, const Eigen::Vector3d& Mi, double detC) const;
+    double power(double c) const;                   ///< cⁿ: by squaring for a whole n ≤ 1024
+    void powers(std::array<float, 8>& c) const;  ///< the same on the fibre rule's 8 lanes, in place
     const Lattice* mLattice;
     /// S in the orthonormal basis (wk, wj, wi = view) as a linear map of S's six entries
     /// (xx, yy, zz, xy, xz, yz) to (kk, jj, ii, kj, ki, ji): row e holds the six outputs'
@@ -77,10 +81,11 @@ private:
     /// (K_B / K_A) · 2(n+1): the ratio of B's density to A's at a lattice point is this times
     /// |det C| (N·l) cosⁿα / (w |C u|³), w the point's height on the disc's hemisphere.
     double mLobeRatio = 0;
-    /// Strategy B's half vectors in (wk, wj, wi), those facing v; their (N·l) cosⁿα.
-    std::array<Eigen::Vector3d, kLobeSamples> mLobeNormal;
-    std::array<double, kLobeSamples> mLobeTerm{};
-    int mLobeCount = 0;
+    double mFibreGate = 0;  ///< the largest λ₁/λ₂ the fibre limit takes (src/fibre_specular.h)
+    /// Strategy B's half vectors in (wk, wj, wi) and their (N·l) cosⁿα; 0 for those facing
+    /// away from v, whose normal is then v.
+    alignas(16) std::array<double, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe
+    int mLobeCount = 0;  ///< how many face v
 };
 
 /// ReflectanceKernel(light, view, shininess, samples)(s), for a single evaluation.
