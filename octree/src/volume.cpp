@@ -20,7 +20,9 @@ namespace vtex::octree {
 namespace {
 
 constexpr std::string_view kVtlMagic{"VTEX.VTL", 8};
-constexpr std::size_t kBlockRecordSize = 8 + 1 + 1 + 4 * 11;
+// A block record: its key, level and flags, then the voxel record (detail::kVoxelRecordSize).
+constexpr std::size_t kBlockHeaderSize = 8 + 1 + 1;
+constexpr std::size_t kBlockRecordSize = kBlockHeaderSize + detail::kVoxelRecordSize;
 
 bool allFinite(const VoxelData& d) {
     if (!std::isfinite(d.density)) return false;
@@ -52,11 +54,7 @@ VolumeBlock decodeBlock(const char* record) {
     b.key = loadLittleEndian<std::uint64_t>(record);
     b.level = std::uint8_t(record[8]);
     b.flags = std::uint8_t(record[9]);
-    const char* f = record + 10;
-    b.data.density = loadLittleEndian<float>(f);
-    for (float& v : b.data.rotation) v = loadLittleEndian<float>(f += 4);
-    for (float& v : b.data.sigma) v = loadLittleEndian<float>(f += 4);
-    for (float& v : b.data.albedo) v = loadLittleEndian<float>(f += 4);
+    b.data = detail::loadVoxelData(record + kBlockHeaderSize);
     return b;
 }
 
@@ -81,13 +79,19 @@ void storeVoxelData(char* out, const VoxelData& d) {
     for (float v : d.albedo) f32(v);
 }
 
-VoxelData readVoxelData(ByteReader& r) {
+VoxelData loadVoxelData(const char* in) {
     VoxelData d;
-    d.density = r.f32();
-    for (float& v : d.rotation) v = r.f32();
-    for (float& v : d.sigma) v = r.f32();
-    for (float& v : d.albedo) v = r.f32();
+    d.density = loadLittleEndian<float>(in);
+    for (float& v : d.rotation) v = loadLittleEndian<float>(in += 4);
+    for (float& v : d.sigma) v = loadLittleEndian<float>(in += 4);
+    for (float& v : d.albedo) v = loadLittleEndian<float>(in += 4);
     return d;
+}
+
+VoxelData readVoxelData(ByteReader& r) {
+    static constexpr char kZeros[kVoxelRecordSize] = {};
+    const char* record = r.bytes(kVoxelRecordSize);
+    return loadVoxelData(record ? record : kZeros);
 }
 
 // Validates one stored voxel's values, not only its checksum (issue 14, item 8): finite,
