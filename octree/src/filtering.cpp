@@ -35,8 +35,10 @@ std::optional<Ellipsoid> filterEllipsoids(std::span<const Ellipsoid> children,
     return filterForms(forms, weights, rule);
 }
 
-std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<const double> weights,
-                                     FilterRule rule) {
+namespace {
+
+// The weighted mean of the forms both rules average; empty for no positive weight.
+std::optional<Mat3> meanForm(std::span<const Mat3> forms, std::span<const double> weights) {
     checkSizes(forms.size(), weights.size());
     Mat3 sum = Mat3::Zero();
     double totalWeight = 0;
@@ -47,9 +49,29 @@ std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<cons
     }
     if (!(totalWeight > 0)) return std::nullopt;
     sum /= totalWeight;
-    const auto result = rule == FilterRule::Neyret ? Ellipsoid::fromM(sum) : Ellipsoid::fromS(sum);
+    return sum;
+}
+
+}  // namespace
+
+std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<const double> weights,
+                                     FilterRule rule) {
+    const auto mean = meanForm(forms, weights);
+    if (!mean) return std::nullopt;
+    const auto result = rule == FilterRule::Neyret ? Ellipsoid::fromM(*mean) : Ellipsoid::fromS(*mean);
     if (!result) return std::nullopt;
     return result->normalized(Normalization::Exact);
+}
+
+std::optional<primitive::PackedPrimitive> filterFormsPacked(std::span<const Mat3> forms,
+                                                            std::span<const double> weights, FilterRule rule) {
+    // filterForms's steps on the shape alone: normalised as it normalises, then packed as
+    // packEllipsoid packs (which normalises again, as it does for the Ellipsoid).
+    const auto mean = meanForm(forms, weights);
+    if (!mean) return std::nullopt;
+    const auto shape = rule == FilterRule::Neyret ? Ellipsoid::shapeFromM(*mean) : Ellipsoid::shapeFromS(*mean);
+    if (!shape) return std::nullopt;
+    return primitive::pack(shape->normalized());
 }
 
 std::optional<Mat3> storedFilterForm(const VoxelData& voxel, FilterRule rule) {

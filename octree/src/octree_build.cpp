@@ -105,9 +105,9 @@ struct OctreeBuilder::Impl {
                                   std::size_t end = begin + 1;
                                   const std::uint64_t parent = children[begin].key >> 3;
                                   while (end < children.size() && (children[end].key >> 3) == parent) ++end;
-                                  filterChildren(&children[begin], end - begin, options.rule, f);
                                   const bool sampled = measure && isSampled(parent, parentLevel, starts.size(),
                                                                             options.filterErrorSamples);
+                                  filterChildren(&children[begin], end - begin, options.rule, sampled, f);
                                   const float error = sampled ? float(filterErrorOf(&children[begin], end - begin, f))
                                                               : std::numeric_limits<float>::quiet_NaN();
                                   parents[g] = PNode{parent, f.data, error, 0};
@@ -349,7 +349,7 @@ struct OctreeBuilder::Impl {
                                       PNode& node = level[selected[s]];
                                       if (!std::isnan(node.filterError)) continue;
                                       const std::size_t b = starts[l][selected[s]], e = starts[l][selected[s] + 1];
-                                      filterChildren(&levels[l + 1][b], e - b, options.rule, f);
+                                      filterChildren(&levels[l + 1][b], e - b, options.rule, true, f);
                                       node.filterError = float(filterErrorOf(&levels[l + 1][b], e - b, f));
                                   }
                               });

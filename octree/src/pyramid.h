@@ -70,7 +70,9 @@ struct Filtered {
 // The design's filter for one parent from its (1 to 8) non-empty children. The children are
 // read through storedFilterForm, not rebuilt as Ellipsoids: this runs once per node of the
 // pyramid and was the build's cost (an eigensolver and elliptic integrals per child).
-void filterChildren(const PNode* children, std::size_t count, FilterRule rule, Filtered& out);
+// `keepResult`: the filtered Ellipsoid is kept in out.result, for filterErrorOf; otherwise only
+// its packed form is made (filterFormsPacked), the same bytes for less.
+void filterChildren(const PNode* children, std::size_t count, FilterRule rule, bool keepResult, Filtered& out);
 
 // The filter error of one parent whose filter `f` of its children filterChildren has just made
 // (filterError: its NDF against the mixture of its children's), with the children rebuilt as

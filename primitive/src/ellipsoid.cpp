@@ -141,19 +141,38 @@ Vec3 floorAxisRatios(const Vec3& lengths) {
 
 Ellipsoid::Ellipsoid() : Ellipsoid(Mat3::Identity(), Vec3::Ones()) {}
 
-Ellipsoid::Ellipsoid(const Mat3& basis, const Vec3& semiAxes) {
+EllipsoidShape Ellipsoid::shapeOf(const Mat3& basis, const Vec3& semiAxes) {
     const Vec3 floored = floorAxisRatios(semiAxes);
     std::array<int, 3> order = {0, 1, 2};
     std::sort(order.begin(), order.end(), [&](int i, int j) { return floored[i] < floored[j]; });
+    EllipsoidShape shape;
     for (int k = 0; k < 3; ++k) {
-        mBasis.col(k) = basis.col(order[k]);
-        mSemiAxes[k] = floored[order[k]];
+        shape.basis.col(k) = basis.col(order[k]);
+        shape.semiAxes[k] = floored[order[k]];
     }
-    const Vec3& a = mSemiAxes;
-    const double volumeProduct = a.prod();
+    const Vec3& a = shape.semiAxes;
+    shape.exactMeanArea = a[2] * a[2] * unitSurfaceArea(a[0] / a[2], a[1] / a[2]) / 4;
+    return shape;
+}
+
+Ellipsoid::Ellipsoid(const Mat3& basis, const Vec3& semiAxes) {
+    const EllipsoidShape shape = shapeOf(basis, semiAxes);
+    mBasis = shape.basis;
+    mSemiAxes = shape.semiAxes;
+    mExactMeanArea = shape.exactMeanArea;
+    const double volumeProduct = mSemiAxes.prod();
     mDetM = volumeProduct * volumeProduct;
-    mExactMeanArea = a[2] * a[2] * unitSurfaceArea(a[0] / a[2], a[1] / a[2]) / 4;
     cacheForms();
+}
+
+EllipsoidShape EllipsoidShape::normalized() const {
+    // Ellipsoid::scaled(1 / √Ā) on the fields a shape has, in the same order of operations.
+    const double factor = 1 / std::sqrt(exactMeanArea);
+    const double areaFactor = factor * factor;
+    EllipsoidShape copy = *this;
+    copy.semiAxes *= factor;
+    copy.exactMeanArea *= areaFactor;
+    return copy;
 }
 
 void Ellipsoid::cacheForms() {
@@ -197,6 +216,23 @@ std::optional<Ellipsoid> Ellipsoid::fromS(const Mat3& S) {
     const Vec3 sigma = solver.eigenvalues().cwiseMax(0.0).cwiseSqrt();
     if (!(sigma.maxCoeff() > 0)) return std::nullopt;
     return fromBasisAndSigma(solver.eigenvectors(), sigma);
+}
+
+std::optional<EllipsoidShape> Ellipsoid::shapeFromS(const Mat3& S) {
+    // fromS's steps; fromAxes's checks only refuse what an eigensolver never returns.
+    if (!isFinite(S)) return std::nullopt;
+    const Eigen::SelfAdjointEigenSolver<Mat3> solver(S);
+    const Vec3 sigma = solver.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+    if (!(sigma.maxCoeff() > 0)) return std::nullopt;
+    return shapeOf(solver.eigenvectors(), semiAxesFromSigma(sigma));
+}
+
+std::optional<EllipsoidShape> Ellipsoid::shapeFromM(const Mat3& M) {
+    if (!isFinite(M)) return std::nullopt;
+    const Eigen::SelfAdjointEigenSolver<Mat3> solver(M);
+    const Vec3 lengthsSquared = solver.eigenvalues().cwiseMax(0.0);
+    if (!(lengthsSquared.maxCoeff() > 0)) return std::nullopt;
+    return shapeOf(solver.eigenvectors(), lengthsSquared.cwiseSqrt());
 }
 
 std::optional<Ellipsoid> Ellipsoid::fitNormals(std::span<const Vec3> normals,
