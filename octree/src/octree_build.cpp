@@ -82,6 +82,7 @@ Range pointRange(const VoxelData& d) {
 struct OctreeBuilder::Impl {
     SparseVolume volume;
     BuildOptions options;
+    bool keepFinest = true;     // volume.blocks kept after buildAll, for finest() and updateRegion
     std::vector<Level> levels;  // levels[ℓ], ℓ = 0 … L
     std::atomic<std::uint64_t> filtered{0};
 
@@ -148,6 +149,10 @@ struct OctreeBuilder::Impl {
             for (std::uint32_t l = 0; l <= L(); ++l) sources[l].reserve(counts[l]);
             for (const auto& b : blocks) sources[b.level].push_back(sourceNode(b));
         }
+        // The pyramid now holds every block: a builder nobody updates frees them here (56 bytes
+        // per finest voxel), so the levels and the tree made next can reuse that memory instead
+        // of faulting in fresh pages (vtex build keeps freed memory: keepFreedMemory).
+        if (!keepFinest) std::vector<VolumeBlock>().swap(volume.blocks);
         const std::uint64_t total = counts[L()];
         progress.start("filter", total + total / 7 + 1);
         levels[L()] = std::move(sources[L()]);
@@ -366,6 +371,9 @@ struct OctreeBuilder::Impl {
 };
 
 OctreeBuilder::OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress)
+    : OctreeBuilder(std::move(finest), options, progress, true) {}
+
+OctreeBuilder::OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress, bool keepFinest)
     : mImpl(std::make_unique<Impl>()) {
     if (finest.info.levels > std::uint32_t(kMaxLevel)) throw std::invalid_argument("resolution too large");
     if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
@@ -373,6 +381,7 @@ OctreeBuilder::OctreeBuilder(SparseVolume finest, const BuildOptions& options, P
     mImpl->volume = std::move(finest);
     mImpl->volume.sortBlocks();
     mImpl->options = options;
+    mImpl->keepFinest = keepFinest;
     mImpl->buildAll(progress);
 }
 
@@ -528,7 +537,7 @@ Octree OctreeBuilder::compress(Progress& progress) const {
 }
 
 Octree buildOctree(SparseVolume volume, const BuildOptions& options, Progress& progress) {
-    OctreeBuilder builder(std::move(volume), options, progress);
+    OctreeBuilder builder(std::move(volume), options, progress, false);
     return builder.compress(progress);
 }
 
