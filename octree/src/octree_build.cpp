@@ -16,6 +16,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -51,15 +52,32 @@ LevelBox boxAtLevel(const VoxelBox& box, std::uint32_t shift) {
     return b;
 }
 
+// The indices i in [0, n) with pick(i), in increasing order, found on all threads: a level's
+// walk over its millions of nodes otherwise ran on one core while the other waited.
+template <class Pick>
+std::vector<std::size_t> pickIndices(std::size_t n, Pick pick) {
+    using Indices = std::vector<std::size_t>;
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, 16384), Indices{},
+        [&](const tbb::blocked_range<std::size_t>& range, Indices picked) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i)
+                if (pick(i)) picked.push_back(i);
+            return picked;
+        },
+        // The left range's indices come first: the join keeps the order.
+        [](Indices left, const Indices& right) {
+            left.insert(left.end(), right.begin(), right.end());
+            return left;
+        });
+}
+
 // Indices where a new parent starts in a sorted child level, restricted to `keep(parentKey)`.
 template <class Keep>
 std::vector<std::size_t> groupStarts(const Level& children, Keep keep) {
-    std::vector<std::size_t> starts;
-    for (std::size_t i = 0; i < children.size(); ++i) {
+    return pickIndices(children.size(), [&](std::size_t i) {
         const std::uint64_t parent = children[i].key >> 3;
-        if ((i == 0 || (children[i - 1].key >> 3) != parent) && keep(parent)) starts.push_back(i);
-    }
-    return starts;
+        return (i == 0 || (children[i - 1].key >> 3) != parent) && keep(parent);
+    });
 }
 
 // The range of every entry a node's descendants hold (density, the matrix S, albedo): what the
@@ -343,10 +361,9 @@ struct OctreeBuilder::Impl {
             Level& level = levels[l];
             std::uint64_t count = 0;
             for (const auto& n : level) count += (n.flags & kSource) ? 0 : 1;
-            std::vector<std::size_t> selected;
-            for (std::size_t i = 0; i < level.size(); ++i)
-                if (!(level[i].flags & kSource) && isSampled(level[i].key, l, count, options.filterErrorSamples))
-                    selected.push_back(i);
+            const std::vector<std::size_t> selected = pickIndices(level.size(), [&](std::size_t i) {
+                return !(level[i].flags & kSource) && isSampled(level[i].key, l, count, options.filterErrorSamples);
+            });
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, selected.size(), 64),
                               [&](const tbb::blocked_range<std::size_t>& range) {
                                   Filtered f;
