@@ -121,21 +121,41 @@ double filterError(const Ellipsoid& result, std::span<const Ellipsoid> children,
     buffer.resize(5 * n);
     const std::span<double> all(buffer);
     std::fill(buffer.begin() + 3 * std::ptrdiff_t(n), buffer.end(), 0.0);
-    const auto x = all.subspan(0, n), y = all.subspan(n, n), z = all.subspan(2 * n, n);
     const auto mixture = all.subspan(3 * n, n), own = all.subspan(4 * n, n);
-    for (std::size_t p = 0; p < n; ++p) {
-        x[p] = points[p].x();
-        y[p] = points[p].y();
-        z[p] = points[p].z();
+    // The default set's arrays are made once (its points live as long as the process): copying
+    // them on every call was a quarter of this function's own instructions in the octree build.
+    static const std::span<const Vec3> defaultPoints = sphericalPointSet();
+    static const std::vector<double> defaultArrays = [] {
+        const std::size_t count = defaultPoints.size();
+        std::vector<double> arrays(3 * count);
+        for (std::size_t p = 0; p < count; ++p) {
+            arrays[p] = defaultPoints[p].x();
+            arrays[count + p] = defaultPoints[p].y();
+            arrays[2 * count + p] = defaultPoints[p].z();
+        }
+        return arrays;
+    }();
+    std::span<const double> arrays(defaultArrays);
+    if (points.data() != defaultPoints.data() || n != defaultPoints.size()) {
+        for (std::size_t p = 0; p < n; ++p) {
+            all[p] = points[p].x();
+            all[n + p] = points[p].y();
+            all[2 * n + p] = points[p].z();
+        }
+        arrays = all.subspan(0, 3 * n);
     }
+    const auto x = arrays.subspan(0, n), y = arrays.subspan(n, n), z = arrays.subspan(2 * n, n);
     for (std::size_t i = 0; i < children.size(); ++i)
         if (usableWeight(weights[i])) children[i].accumulateNormalizedNormalDistribution(x, y, z, weights[i], mixture);
     result.accumulateNormalizedNormalDistribution(x, y, z, 1.0, own);
-    double squaredSum = 0;
+    // The squared differences first, in a loop the compiler vectorises (a division each), then
+    // summed in order, as the single loop summed them.
     for (std::size_t p = 0; p < n; ++p) {
         const double difference = own[p] - mixture[p] / totalWeight;
-        squaredSum += difference * difference;
+        own[p] = difference * difference;
     }
+    double squaredSum = 0;
+    for (std::size_t p = 0; p < n; ++p) squaredSum += own[p];
     return std::sqrt(squaredSum * 4 * std::numbers::pi / double(n));
 }
 
