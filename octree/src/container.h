@@ -67,6 +67,8 @@ public:
     }
     float f32() { return std::bit_cast<float>(u32()); }
     double f64() { return std::bit_cast<double>(u64()); }
+    /// The next `n` bytes, or null (and ok() false) if fewer are left.
+    const char* bytes(std::size_t n) { return take(n) ? mBytes.data() + mPos - n : nullptr; }
     bool ok() const { return mOk; }
     std::size_t remaining() const { return mBytes.size() - mPos; }
 
@@ -158,6 +160,10 @@ void writeVoxelData(ByteWriter& w, const VoxelData& d);
 /// The same record stored at `out` (kVoxelRecordSize bytes), for writers that fill a buffer
 /// from several threads.
 void storeVoxelData(char* out, const VoxelData& d);
+/// The record at `in` (kVoxelRecordSize bytes, all in bounds): the one decoder of the layout
+/// storeVoxelData writes, shared by readVoxelData and the .vtl reader's block records.
+VoxelData loadVoxelData(const char* in);
+/// The next record of `r`; past its end, the record of kVoxelRecordSize zero bytes.
 VoxelData readVoxelData(ByteReader& r);
 /// A problem with a parsed voxel (non-finite, negative, empty when not allowed), or empty.
 std::string_view checkVoxelData(const VoxelData& d, bool allowEmpty);

@@ -35,8 +35,10 @@ std::optional<Ellipsoid> filterEllipsoids(std::span<const Ellipsoid> children,
     return filterForms(forms, weights, rule);
 }
 
-std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<const double> weights,
-                                     FilterRule rule) {
+namespace {
+
+// The weighted mean of the forms both rules average; empty for no positive weight.
+std::optional<Mat3> meanForm(std::span<const Mat3> forms, std::span<const double> weights) {
     checkSizes(forms.size(), weights.size());
     Mat3 sum = Mat3::Zero();
     double totalWeight = 0;
@@ -47,9 +49,29 @@ std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<cons
     }
     if (!(totalWeight > 0)) return std::nullopt;
     sum /= totalWeight;
-    const auto result = rule == FilterRule::Neyret ? Ellipsoid::fromM(sum) : Ellipsoid::fromS(sum);
+    return sum;
+}
+
+}  // namespace
+
+std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<const double> weights,
+                                     FilterRule rule) {
+    const auto mean = meanForm(forms, weights);
+    if (!mean) return std::nullopt;
+    const auto result = rule == FilterRule::Neyret ? Ellipsoid::fromM(*mean) : Ellipsoid::fromS(*mean);
     if (!result) return std::nullopt;
     return result->normalized(Normalization::Exact);
+}
+
+std::optional<primitive::PackedPrimitive> filterFormsPacked(std::span<const Mat3> forms,
+                                                            std::span<const double> weights, FilterRule rule) {
+    // filterForms's steps on the shape alone: normalised as it normalises, then packed as
+    // packEllipsoid packs (which normalises again, as it does for the Ellipsoid).
+    const auto mean = meanForm(forms, weights);
+    if (!mean) return std::nullopt;
+    const auto shape = rule == FilterRule::Neyret ? Ellipsoid::shapeFromM(*mean) : Ellipsoid::shapeFromS(*mean);
+    if (!shape) return std::nullopt;
+    return primitive::pack(shape->normalized());
 }
 
 std::optional<Mat3> storedFilterForm(const VoxelData& voxel, FilterRule rule) {
@@ -99,21 +121,41 @@ double filterError(const Ellipsoid& result, std::span<const Ellipsoid> children,
     buffer.resize(5 * n);
     const std::span<double> all(buffer);
     std::fill(buffer.begin() + 3 * std::ptrdiff_t(n), buffer.end(), 0.0);
-    const auto x = all.subspan(0, n), y = all.subspan(n, n), z = all.subspan(2 * n, n);
     const auto mixture = all.subspan(3 * n, n), own = all.subspan(4 * n, n);
-    for (std::size_t p = 0; p < n; ++p) {
-        x[p] = points[p].x();
-        y[p] = points[p].y();
-        z[p] = points[p].z();
+    // The default set's arrays are made once (its points live as long as the process): copying
+    // them on every call was a quarter of this function's own instructions in the octree build.
+    static const std::span<const Vec3> defaultPoints = sphericalPointSet();
+    static const std::vector<double> defaultArrays = [] {
+        const std::size_t count = defaultPoints.size();
+        std::vector<double> arrays(3 * count);
+        for (std::size_t p = 0; p < count; ++p) {
+            arrays[p] = defaultPoints[p].x();
+            arrays[count + p] = defaultPoints[p].y();
+            arrays[2 * count + p] = defaultPoints[p].z();
+        }
+        return arrays;
+    }();
+    std::span<const double> arrays(defaultArrays);
+    if (points.data() != defaultPoints.data() || n != defaultPoints.size()) {
+        for (std::size_t p = 0; p < n; ++p) {
+            all[p] = points[p].x();
+            all[n + p] = points[p].y();
+            all[2 * n + p] = points[p].z();
+        }
+        arrays = all.subspan(0, 3 * n);
     }
+    const auto x = arrays.subspan(0, n), y = arrays.subspan(n, n), z = arrays.subspan(2 * n, n);
     for (std::size_t i = 0; i < children.size(); ++i)
         if (usableWeight(weights[i])) children[i].accumulateNormalizedNormalDistribution(x, y, z, weights[i], mixture);
     result.accumulateNormalizedNormalDistribution(x, y, z, 1.0, own);
-    double squaredSum = 0;
+    // The squared differences first, in a loop the compiler vectorises (a division each), then
+    // summed in order, as the single loop summed them.
     for (std::size_t p = 0; p < n; ++p) {
         const double difference = own[p] - mixture[p] / totalWeight;
-        squaredSum += difference * difference;
+        own[p] = difference * difference;
     }
+    double squaredSum = 0;
+    for (std::size_t p = 0; p < n; ++p) squaredSum += own[p];
     return std::sqrt(squaredSum * 4 * std::numbers::pi / double(n));
 }
 

@@ -12,7 +12,7 @@ bool isSampled(std::uint64_t key, std::uint32_t level, std::uint64_t count, std:
     return mix64(key ^ (std::uint64_t(level) << 58)) < threshold;
 }
 
-void filterChildren(const PNode* children, std::size_t count, FilterRule rule, Filtered& out) {
+void filterChildren(const PNode* children, std::size_t count, FilterRule rule, bool keepResult, Filtered& out) {
     out.forms.clear();
     out.weights.clear();
     out.result.reset();
@@ -41,9 +41,18 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, F
     VoxelData& p = out.data;
     p.density = float(mass / 8.0);
     for (int c = 0; c < 3; ++c) p.albedo[c] = mass > 0 ? float(albedo[c] / mass) : 0.0f;
-    if (!out.forms.empty()) out.result = filterForms(out.forms, out.weights, rule);
-    if (out.result) packEllipsoid(*out.result, p);
-    else packIsotropic(p);
+    if (out.forms.empty()) {
+        packIsotropic(p);
+    } else if (keepResult) {
+        out.result = filterForms(out.forms, out.weights, rule);
+        if (out.result) packEllipsoid(*out.result, p);
+        else packIsotropic(p);
+    } else if (const auto packed = filterFormsPacked(out.forms, out.weights, rule)) {
+        p.rotation = packed->rotation;
+        p.sigma = packed->sigma;
+    } else {
+        packIsotropic(p);
+    }
 }
 
 // The filter error of one parent whose filter `f` of its children filterChildren has just made

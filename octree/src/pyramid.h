@@ -29,9 +29,13 @@ struct PNode {
     std::uint8_t flags;
 };
 
-// Leaves the nodes of a resized level uninitialised: each is written right after, from all
-// threads, and value-initialising them first was one more single-threaded pass over the level's
-// fresh pages (a pyramid level holds up to millions of nodes).
+// Leaves the nodes of a resized level unwritten: each is written right after, from all
+// threads, and initialising them first was one more single-threaded pass over the level's fresh
+// pages (a pyramid level holds up to millions of nodes). Default-initialising was not enough:
+// a PNode's VoxelData has default member values, whose stores were a third of buildAll's own
+// samples at 512³ (perf record). Nothing is constructed: a node is an aggregate with a trivial
+// destructor, an implicit-lifetime type, which the allocated storage holds as soon as it is
+// written ([intro.object]).
 template <class T>
 struct UninitialisedAllocator : std::allocator<T> {
     UninitialisedAllocator() = default;
@@ -42,8 +46,9 @@ struct UninitialisedAllocator : std::allocator<T> {
         ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
     }
     template <class U>
-    void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
-        ::new (static_cast<void*>(p)) U;  // default-, not value-initialised
+    void construct(U*) noexcept {
+        static_assert((std::is_aggregate_v<U> || std::is_trivially_default_constructible_v<U>) &&
+                      std::is_trivially_destructible_v<U> && std::is_trivially_copyable_v<U>);
     }
 };
 
@@ -70,7 +75,9 @@ struct Filtered {
 // The design's filter for one parent from its (1 to 8) non-empty children. The children are
 // read through storedFilterForm, not rebuilt as Ellipsoids: this runs once per node of the
 // pyramid and was the build's cost (an eigensolver and elliptic integrals per child).
-void filterChildren(const PNode* children, std::size_t count, FilterRule rule, Filtered& out);
+// `keepResult`: the filtered Ellipsoid is kept in out.result, for filterErrorOf; otherwise only
+// its packed form is made (filterFormsPacked), the same bytes for less.
+void filterChildren(const PNode* children, std::size_t count, FilterRule rule, bool keepResult, Filtered& out);
 
 // The filter error of one parent whose filter `f` of its children filterChildren has just made
 // (filterError: its NDF against the mixture of its children's), with the children rebuilt as

@@ -20,7 +20,9 @@ namespace vtex::octree {
 namespace {
 
 constexpr std::string_view kVtlMagic{"VTEX.VTL", 8};
-constexpr std::size_t kBlockRecordSize = 8 + 1 + 1 + 4 * 11;
+// A block record: its key, level and flags, then the voxel record (detail::kVoxelRecordSize).
+constexpr std::size_t kBlockHeaderSize = 8 + 1 + 1;
+constexpr std::size_t kBlockRecordSize = kBlockHeaderSize + detail::kVoxelRecordSize;
 
 bool allFinite(const VoxelData& d) {
     if (!std::isfinite(d.density)) return false;
@@ -52,11 +54,7 @@ VolumeBlock decodeBlock(const char* record) {
     b.key = loadLittleEndian<std::uint64_t>(record);
     b.level = std::uint8_t(record[8]);
     b.flags = std::uint8_t(record[9]);
-    const char* f = record + 10;
-    b.data.density = loadLittleEndian<float>(f);
-    for (float& v : b.data.rotation) v = loadLittleEndian<float>(f += 4);
-    for (float& v : b.data.sigma) v = loadLittleEndian<float>(f += 4);
-    for (float& v : b.data.albedo) v = loadLittleEndian<float>(f += 4);
+    b.data = detail::loadVoxelData(record + kBlockHeaderSize);
     return b;
 }
 
@@ -81,13 +79,19 @@ void storeVoxelData(char* out, const VoxelData& d) {
     for (float v : d.albedo) f32(v);
 }
 
-VoxelData readVoxelData(ByteReader& r) {
+VoxelData loadVoxelData(const char* in) {
     VoxelData d;
-    d.density = r.f32();
-    for (float& v : d.rotation) v = r.f32();
-    for (float& v : d.sigma) v = r.f32();
-    for (float& v : d.albedo) v = r.f32();
+    d.density = loadLittleEndian<float>(in);
+    for (float& v : d.rotation) v = loadLittleEndian<float>(in += 4);
+    for (float& v : d.sigma) v = loadLittleEndian<float>(in += 4);
+    for (float& v : d.albedo) v = loadLittleEndian<float>(in += 4);
     return d;
+}
+
+VoxelData readVoxelData(ByteReader& r) {
+    static constexpr char kZeros[kVoxelRecordSize] = {};
+    const char* record = r.bytes(kVoxelRecordSize);
+    return loadVoxelData(record ? record : kZeros);
 }
 
 // Validates one stored voxel's values, not only its checksum (issue 14, item 8): finite,
@@ -199,11 +203,8 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
         throw InputError(file, "size does not match its block count " + std::to_string(count), where);
     const std::uint32_t L = volume.info.levels;
     const char* records = payload.data() + 8;
-    // Decoded in one pass into reserved storage: resizing first would clear every block (a
-    // 1024³ volume holds 4·10⁶) only for the decoder to overwrite it.
-    volume.blocks.reserve(count);
-    for (std::uint64_t i = 0; i < count; ++i) volume.blocks.push_back(decodeBlock(records + kBlockRecordSize * i));
     // A block's problem, or empty; blocks i − 1 and i must not overlap (keys strictly in order).
+    // The previous block is read from its record, which every thread can see, decoded or not.
     const auto problemAt = [&](std::uint64_t i) -> std::string_view {
         const VolumeBlock& b = volume.blocks[i];
         if (b.level > L) return "level deeper than the resolution";
@@ -212,21 +213,31 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
         if (b.key >= (std::uint64_t(1) << (3 * b.level))) return "key out of range";
         if (auto problem = checkVoxelData(b.data, false); !problem.empty()) return problem;
         if (i > 0) {
-            const VolumeBlock& p = volume.blocks[i - 1];
-            if (volume.finestKey(b) < volume.finestKey(p) + (std::uint64_t(1) << (3 * (L - p.level))))
+            const char* previous = records + kBlockRecordSize * (i - 1);
+            const std::uint64_t previousKey = loadLittleEndian<std::uint64_t>(previous);
+            const std::uint32_t previousLevel = std::uint8_t(previous[8]);
+            // A level beyond L is the previous block's own problem, reported first.
+            if (previousLevel <= L && volume.finestKey(b) < (previousKey << (3 * (L - previousLevel))) +
+                                                                 (std::uint64_t(1) << (3 * (L - previousLevel))))
                 return "blocks out of order or overlapping";
         }
         return {};
     };
-    // Checked on all threads; the error names the first bad block, as a sequential reader would.
+    // Decoded and checked in one pass on all threads: the decode into reserved storage ran on
+    // one core before the check (a 512³ bush holds 10⁶ blocks), and the check read every block
+    // back. Sized first, which clears the blocks once; the error names the first bad block, as a
+    // sequential reader would.
+    volume.blocks.resize(count);
     std::atomic<std::uint64_t> firstBad{count};
     tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, count, 16384), [&](const auto& range) {
-        for (std::uint64_t i = range.begin(); i != range.end() && i < firstBad.load(); ++i)
+        for (std::uint64_t i = range.begin(); i != range.end() && i < firstBad.load(); ++i) {
+            volume.blocks[i] = decodeBlock(records + kBlockRecordSize * i);
             if (!problemAt(i).empty()) {
                 std::uint64_t seen = firstBad.load();
                 while (i < seen && !firstBad.compare_exchange_weak(seen, i)) {}
                 return;
             }
+        }
     });
     if (firstBad < count)
         throw InputError(file, std::string(problemAt(firstBad)), where + ", block " + std::to_string(firstBad.load()));

@@ -37,6 +37,11 @@ std::optional<Ellipsoid> filterEllipsoids(std::span<const Ellipsoid> children,
 /// filterEllipsoids forms them or storedFilterForm reads them from a voxel.
 std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<const double> weights,
                                      FilterRule rule);
+/// What packEllipsoid stores of filterForms(forms, weights, rule), to the bit, without building
+/// the Ellipsoid (its cached forms, checks and copies were an eighth of the octree filter's
+/// instructions): the build keeps the Ellipsoid only for the nodes whose filter error it measures.
+std::optional<primitive::PackedPrimitive> filterFormsPacked(std::span<const Mat3> forms,
+                                                            std::span<const double> weights, FilterRule rule);
 
 /// The matrix `rule` averages for a stored voxel, read from its eigen-form (R, σ) without
 /// rebuilding its Ellipsoid: the octree build's per-child cost. For Sggx it takes the stored

@@ -157,6 +157,10 @@ public:
 
 private:
     OctreeBuilder();
+    // keepFinest false: the finest level's blocks are freed once the pyramid holds them (finest()
+    // is then empty), for buildOctree, whose builder nobody sees or updates.
+    OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress, bool keepFinest);
+    friend Octree buildOctree(SparseVolume volume, const BuildOptions& options, Progress& progress);
     struct Impl;
     std::unique_ptr<Impl> mImpl;
 };

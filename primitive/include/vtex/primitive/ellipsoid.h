@@ -49,6 +49,17 @@ enum class Normalization {
     ThreeAxis  ///< the paper's stand-in: mean of A along the three axes, π(a₂a₃+a₁a₃+a₁a₂)/3
 };
 
+/// An ellipsoid's axes as Ellipsoid's constructors leave them (sorted, floored) and its exact
+/// mean apparent area, without the forms an Ellipsoid caches for evaluating it: all that storing
+/// it takes (packing.h), for a caller that makes millions and evaluates none (the octree build).
+struct EllipsoidShape {
+    Mat3 basis;            ///< the axes as columns, sorted by increasing semi-axis
+    Vec3 semiAxes;         ///< a₁ ≤ a₂ ≤ a₃ along them
+    double exactMeanArea;  ///< surface area / 4
+    /// Scaled to unit exact mean area with Ellipsoid::normalized(Exact)'s arithmetic, to the bit.
+    EllipsoidShape normalized() const;
+};
+
 class Ellipsoid {
 public:
     /// A sphere of radius 1.
@@ -68,6 +79,10 @@ public:
     /// (1,1,0) give a needle, (1,0,0) a disc. Empty if S is not finite or has no positive
     /// eigenvalue.
     static std::optional<Ellipsoid> fromS(const Mat3& S);
+    /// The shape of fromS(S) and of fromM(M), to the bit, without building the Ellipsoid; empty
+    /// where those are.
+    static std::optional<EllipsoidShape> shapeFromS(const Mat3& S);
+    static std::optional<EllipsoidShape> shapeFromM(const Mat3& M);
     /// The design's two-step fit to a weighted set of surface normals (sign ignored): axes
     /// from the eigenvectors of E = Σ wₜ nₜnₜᵀ, then σₖ = Σ wₜ|ωₖ·nₜ| / Σ wₜ along each, and
     /// S = R diag(σₖ²) Rᵀ. Exact for the normals of one ellipsoid, a disc and a fibre; its
@@ -132,6 +147,8 @@ public:
 
 private:
     Ellipsoid(const Mat3& basis, const Vec3& semiAxes);
+    /// Sorts and floors the axes, and computes the exact mean area: every constructor's shape.
+    static EllipsoidShape shapeOf(const Mat3& basis, const Vec3& semiAxes);
 
     void cacheForms();
 
