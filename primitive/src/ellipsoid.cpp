@@ -155,8 +155,9 @@ EllipsoidShape Ellipsoid::shapeOf(const Mat3& basis, const Vec3& semiAxes) {
     return shape;
 }
 
-Ellipsoid::Ellipsoid(const Mat3& basis, const Vec3& semiAxes) {
-    const EllipsoidShape shape = shapeOf(basis, semiAxes);
+Ellipsoid::Ellipsoid(const Mat3& basis, const Vec3& semiAxes) : Ellipsoid(shapeOf(basis, semiAxes)) {}
+
+Ellipsoid::Ellipsoid(const EllipsoidShape& shape) {
     mBasis = shape.basis;
     mSemiAxes = shape.semiAxes;
     mExactMeanArea = shape.exactMeanArea;
@@ -193,11 +194,9 @@ Ellipsoid Ellipsoid::fromAxes(const Mat3& basis, const Vec3& semiAxes) {
 }
 
 std::optional<Ellipsoid> Ellipsoid::fromM(const Mat3& M) {
-    if (!isFinite(M)) return std::nullopt;
-    const Eigen::SelfAdjointEigenSolver<Mat3> solver(M);
-    const Vec3 lengthsSquared = solver.eigenvalues().cwiseMax(0.0);
-    if (!(lengthsSquared.maxCoeff() > 0)) return std::nullopt;
-    return Ellipsoid(solver.eigenvectors(), lengthsSquared.cwiseSqrt());
+    const auto shape = shapeFromM(M);
+    if (!shape) return std::nullopt;
+    return Ellipsoid(*shape);
 }
 
 std::optional<Ellipsoid> Ellipsoid::fromQ(const Mat3& Q) {
@@ -211,15 +210,14 @@ std::optional<Ellipsoid> Ellipsoid::fromQ(const Mat3& Q) {
 }
 
 std::optional<Ellipsoid> Ellipsoid::fromS(const Mat3& S) {
-    if (!isFinite(S)) return std::nullopt;
-    const Eigen::SelfAdjointEigenSolver<Mat3> solver(S);
-    const Vec3 sigma = solver.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-    if (!(sigma.maxCoeff() > 0)) return std::nullopt;
-    return fromBasisAndSigma(solver.eigenvectors(), sigma);
+    const auto shape = shapeFromS(S);
+    if (!shape) return std::nullopt;
+    return Ellipsoid(*shape);
 }
 
 std::optional<EllipsoidShape> Ellipsoid::shapeFromS(const Mat3& S) {
-    // fromS's steps; fromAxes's checks only refuse what an eigensolver never returns.
+    // An eigensolver's basis is orthonormal and semiAxesFromSigma's axes finite and
+    // non-negative, so fromAxes's checks have nothing to refuse here.
     if (!isFinite(S)) return std::nullopt;
     const Eigen::SelfAdjointEigenSolver<Mat3> solver(S);
     const Vec3 sigma = solver.eigenvalues().cwiseMax(0.0).cwiseSqrt();

@@ -7,29 +7,20 @@
 
 namespace vtex::primitive {
 
-namespace {
+PackedPrimitive pack(const Ellipsoid& ellipsoid) { return pack(ellipsoid.shape()); }
 
-// The stored form of a normalised ellipsoid's axes.
-PackedPrimitive packNormalized(Mat3 basis, const Vec3& a) {
+PackedPrimitive pack(const EllipsoidShape& shape) {
+    // Normalised to unit exact mean area (Ellipsoid::normalized(Exact)'s arithmetic on the axes).
+    const EllipsoidShape e = shape.normalized();
+    Mat3 basis = e.basis;
     if (basis.determinant() < 0) basis.col(0) = -basis.col(0);  // axes have no sign
     Eigen::Quaterniond q(basis);
     q.normalize();
     if (q.w() < 0) q.coeffs() = -q.coeffs();
+    const Vec3& a = e.semiAxes;
     constexpr double kPi = std::numbers::pi;
     return {{float(q.x()), float(q.y()), float(q.z()), float(q.w())},
             {float(kPi * a[1] * a[2]), float(kPi * a[0] * a[2]), float(kPi * a[0] * a[1])}};
-}
-
-}  // namespace
-
-PackedPrimitive pack(const Ellipsoid& ellipsoid) {
-    const Ellipsoid e = ellipsoid.normalized(Normalization::Exact);
-    return packNormalized(e.basis(), e.semiAxes());
-}
-
-PackedPrimitive pack(const EllipsoidShape& shape) {
-    const EllipsoidShape e = shape.normalized();
-    return packNormalized(e.basis, e.semiAxes);
 }
 
 Mat3 unpackRotation(const std::array<float, 4>& rotation) {

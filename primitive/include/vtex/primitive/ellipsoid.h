@@ -79,8 +79,8 @@ public:
     /// (1,1,0) give a needle, (1,0,0) a disc. Empty if S is not finite or has no positive
     /// eigenvalue.
     static std::optional<Ellipsoid> fromS(const Mat3& S);
-    /// The shape of fromS(S) and of fromM(M), to the bit, without building the Ellipsoid; empty
-    /// where those are.
+    /// The shapes fromS(S) and fromM(M) are built from, without building the Ellipsoid (its
+    /// cached forms); empty where those are.
     static std::optional<EllipsoidShape> shapeFromS(const Mat3& S);
     static std::optional<EllipsoidShape> shapeFromM(const Mat3& M);
     /// The design's two-step fit to a weighted set of surface normals (sign ignored): axes
@@ -95,6 +95,8 @@ public:
     const Mat3& basis() const { return mBasis; }
     /// The semi-axes a₁ ≤ a₂ ≤ a₃ along basis() columns (after the ratio floor).
     const Vec3& semiAxes() const { return mSemiAxes; }
+    /// Its axes and exact mean apparent area, what storing it takes (packing.h).
+    EllipsoidShape shape() const { return {mBasis, mSemiAxes, mExactMeanArea}; }
 
     Mat3 M() const;  ///< Q⁻¹ = R diag(a²) Rᵀ
     Mat3 Q() const;  ///< R diag(a⁻²) Rᵀ
@@ -147,6 +149,7 @@ public:
 
 private:
     Ellipsoid(const Mat3& basis, const Vec3& semiAxes);
+    explicit Ellipsoid(const EllipsoidShape& shape);
     /// Sorts and floors the axes, and computes the exact mean area: every constructor's shape.
     static EllipsoidShape shapeOf(const Mat3& basis, const Vec3& semiAxes);
 

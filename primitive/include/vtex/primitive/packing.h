@@ -24,7 +24,8 @@ struct PackedPrimitive {
 
 /// The ellipsoid (any size: it is normalised to unit mean apparent area, Exact, first) packed.
 PackedPrimitive pack(const Ellipsoid& ellipsoid);
-/// pack() of the ellipsoid with this shape (Ellipsoid::shapeFromS), to the bit.
+/// The ellipsoid with this shape (Ellipsoid::shape, shapeFromS, shapeFromM) packed: pack(Ellipsoid) is
+/// this of its shape.
 PackedPrimitive pack(const EllipsoidShape& shape);
 /// The isotropic primitive: a sphere, S = identity.
 inline constexpr PackedPrimitive kIsotropic{{0, 0, 0, 1}, {1, 1, 1}};
