@@ -90,6 +90,21 @@ bool SpanContext::referenceLight(const Vec3& lw, Vec3& lr) const {
     return true;
 }
 
+double SpanMarcher::shadowWidth(const SpanContext& span, double s) const {
+    return kShadowConeScale * mConeSpread * (span.tIn + (span.tOut - span.tIn) * (s / span.length));
+}
+
+int SpanMarcher::constantShadowLevel(SpanContext& span) const {
+    // The width grows linearly along the span and the level with it (monotonically): when both
+    // ends take the same level, every query does.
+    if (span.shadowLevel == -2) {
+        const int first = mShadows.shadowLevel(span.texel, shadowWidth(span, 0) / span.scale);
+        const int last = mShadows.shadowLevel(span.texel, shadowWidth(span, span.length) / span.scale);
+        span.shadowLevel = first == last ? first : -1;
+    }
+    return span.shadowLevel;
+}
+
 SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double blendWeight, Counters& counters) const {
     SpanResult r;
     const std::size_t lights = mScene.lights.size();
@@ -101,21 +116,6 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
     const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
     double reusedShare = 0;
     const double tau = texel.tauAt(level);
-    // The shadow queries' cone width grows linearly along the span, and their level with it
-    // (monotonically): when both ends of the span take the same level, every query does, and
-    // the level is chosen once instead of per query (a logarithm each).
-    const auto shadowWidth = [&](double sm) {
-        return kShadowConeScale * mConeSpread * (span.tIn + (span.tOut - span.tIn) * (sm / span.length));
-    };
-    // Taken at the march's first query (−2: not yet).
-    int spanShadowLevel = -2;
-    const auto constantShadowLevel = [&] {
-        if (spanShadowLevel == -2) {
-            const int first = mShadows.shadowLevel(texel, shadowWidth(0) / span.scale);
-            spanShadowLevel = first == mShadows.shadowLevel(texel, shadowWidth(span.length) / span.scale) ? first : -1;
-        }
-        return spanShadowLevel;
-    };
     counters.voxels += detail::march(*texel.volume, level, span.p0, span.dir, span.length,
         [&](const GridVoxel& voxel, double s, double ds) {
             const primitive::SggxMatrix& sMatrix = voxel.s;
@@ -166,10 +166,10 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                     if (nearest >= 0) {
                         ml.shadow = track.t[std::size_t(nearest)];
                     } else {
-                        const double width = shadowWidth(sm);
+                        const double width = shadowWidth(span, sm);
                         const Vec3 rc = cellPoint();
                         if (sl.latticeSlot >= 0) {
-                            const ShadowQueries::SpanFrame frame{sl.lr, span.scale, constantShadowLevel()};
+                            const ShadowQueries::SpanFrame frame{sl.lr, span.scale, constantShadowLevel(span)};
                             ml.shadow = mShadows.nearAndCachedShadow(sl.latticeSlot, span.prim, rc, lw, width, counters, &frame);
                         } else {
                             ml.shadow = mShadows.shadowTransmittance(worldPoint(), lw, distance, width, &span.prim, rc, counters);

@@ -64,6 +64,10 @@ struct SpanContext {
     /// A second march takes a recorded shadow query within this distance (one coarse voxel).
     double shareDistance = 1;
     bool anyPointLight = false;
+    /// The shadow queries' level along the whole span, once a march has chosen it (the span's
+    /// other march takes it too): −1 where it changes along the span (chosen per query), −2 not
+    /// chosen yet (SpanMarcher::constantShadowLevel).
+    int shadowLevel = -2;
     PerLight<Light> lights;
     PerLight<ShadowTrack> tracks;
 };
@@ -80,6 +84,12 @@ public:
     SpanResult march(SpanContext& span, int level, bool record, double blendWeight, Counters& counters) const;
 
 private:
+    /// The shadow queries' cone width (world units) at s along the span.
+    double shadowWidth(const SpanContext& span, double s) const;
+    /// SpanContext::shadowLevel, chosen on first use: the level is chosen once per span instead of
+    /// per query (a logarithm each) when the whole span takes the same one.
+    int constantShadowLevel(SpanContext& span) const;
+
     const Scene& mScene;
     const RenderOptions& mOptions;
     const ShadowQueries& mShadows;
