@@ -329,8 +329,10 @@ TEST(Cell, AffineCellsTakeTheSlabTestWithTheSameSpans) {
     std::uniform_real_distribution<double> aim(-0.3, 1.3);
     int compared = 0, hits = 0, exactlyAffine = 0;
     for (int k = 0; k < 3000; ++k) {
-        const auto [affine, trilinear, s] = randomParallelepiped(rng, k);
-        exactlyAffine += AffinePair{affine, trilinear, s}.exactlyAffine();
+        const AffinePair pair = randomParallelepiped(rng, k);
+        const TrilinearCell &affine = pair.affine, &trilinear = pair.trilinear;
+        const double s = pair.s;
+        exactlyAffine += pair.exactlyAffine();
         const Vec3 target = affine.map(Vec3(aim(rng), aim(rng), aim(rng)));
         const Vec3 o = k % 4 == 0 ? affine.map(Vec3(0.5, 0.5, 0.5)) : target + 4 * s * randomUnit(rng);
         const Vec3 d = k % 4 == 0 ? randomUnit(rng) : Vec3((target - o).normalized());
@@ -345,7 +347,9 @@ TEST(Cell, AffineCellsTakeTheSlabTestWithTheSameSpans) {
             EXPECT_EQ(x.faceOut, y.faceOut) << k;
             EXPECT_NEAR(x.tIn, y.tIn, 1e-9 * s) << k;
             EXPECT_NEAR(x.tOut, y.tOut, 1e-9 * s) << k;
-            if (x.faceIn >= 0) EXPECT_LT((x.rIn - y.rIn).norm(), 1e-9) << k;
+            if (x.faceIn >= 0) {
+                EXPECT_LT((x.rIn - y.rIn).norm(), 1e-9) << k;
+            }
             EXPECT_LT((x.rOut - y.rOut).norm(), 1e-9) << k;
         }
     }
@@ -377,8 +381,9 @@ TEST(Cell, AffineCellsInvertByOneSolveAsNewtonDoes) {
         ++found;
         EXPECT_LT((*fast - *slow).norm(), 1e-9) << k;
         // Within the cell the solve is exact up to rounding (outside, within the slack, both clamp).
-        if ((r.array() >= 0).all() && (r.array() <= 1).all())
+        if ((r.array() >= 0).all() && (r.array() <= 1).all()) {
             EXPECT_LT((pair.affine.map(*fast) - x).norm(), 1e-12 * pair.s * 8) << k;
+        }
     }
     EXPECT_GT(found, 1400);
     EXPECT_GT(refused, 300);
