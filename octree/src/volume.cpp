@@ -48,12 +48,17 @@ T loadLittleEndian(const char* p) {
 }
 
 // One kBlockRecordSize-byte record of the VOXL section (the layout serializeVtl writes): the
-// whole record is in bounds, so no field needs ByteReader's checks.
-VolumeBlock decodeBlock(const char* record) {
+// whole record is in bounds, so no field needs ByteReader's checks. decodeBlockHeader: its key,
+// level and flags alone (the voxel left empty).
+VolumeBlock decodeBlockHeader(const char* record) {
     VolumeBlock b;
     b.key = loadLittleEndian<std::uint64_t>(record);
     b.level = std::uint8_t(record[8]);
     b.flags = std::uint8_t(record[9]);
+    return b;
+}
+VolumeBlock decodeBlock(const char* record) {
+    VolumeBlock b = decodeBlockHeader(record);
     b.data = detail::loadVoxelData(record + kBlockHeaderSize);
     return b;
 }
@@ -213,12 +218,9 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
         if (b.key >= (std::uint64_t(1) << (3 * b.level))) return "key out of range";
         if (auto problem = checkVoxelData(b.data, false); !problem.empty()) return problem;
         if (i > 0) {
-            const char* previous = records + kBlockRecordSize * (i - 1);
-            const std::uint64_t previousKey = loadLittleEndian<std::uint64_t>(previous);
-            const std::uint32_t previousLevel = std::uint8_t(previous[8]);
             // A level beyond L is the previous block's own problem, reported first.
-            if (previousLevel <= L && volume.finestKey(b) < (previousKey << (3 * (L - previousLevel))) +
-                                                                 (std::uint64_t(1) << (3 * (L - previousLevel))))
+            const VolumeBlock p = decodeBlockHeader(records + kBlockRecordSize * (i - 1));
+            if (p.level <= L && volume.finestKey(b) < volume.finestKey(p) + (std::uint64_t(1) << (3 * (L - p.level))))
                 return "blocks out of order or overlapping";
         }
         return {};
