@@ -36,11 +36,10 @@ namespace vtex::primitive::detail {
 /// The gate of fibreSpecular: the fibre limit takes a needle when its axis ratio √(λ₁/λ₂) times
 /// √(n+1) (its thickness in units of the lobe's width) is below kFibreGate (n+1)^kFibreGateGrowth.
 /// The limit's error grows with that thickness, and the lattice-and-lobe estimator's shrinks;
-/// the gate sits where the two cross, measured on needles against the paper's integration
-/// (60 random orientations and light/view pairs each; ReflectanceKernel.FibreLimitHoldsUpToItsGate):
-/// thickness 0.13, 0.25, 0.45, 0.6 at shininess 1, 10, 100, 300, where both are 5 %, 7 %, 15 %
-/// and 18 % off. (A fixed 0.15 left the needles between 0.15 and the crossing to the lattice and
-/// lobe, 16–20 % off at shininess 100–300.)
+/// the gate sits where the two cross on needles against the paper's integration: from a thickness
+/// of about an eighth at shininess 1 to about half at 300 (a throw-away scan; docs/micro-primitive.md).
+/// ReflectanceKernel.FibreLimitHoldsUpToItsGate bounds the error at the gate's edge. (A fixed 0.15
+/// left thicker needles to the lattice and lobe, well off at shininess 100 and more.)
 inline constexpr double kFibreGate = 0.105;
 inline constexpr double kFibreGateGrowth = 0.3;
 /// The gate as the largest λ₁/λ₂ the fibre limit takes at shininess n.
