@@ -3,6 +3,8 @@
 // against the paper's integration (reflectanceReference).
 #include <vtex/primitive/reflectance_kernel.h>
 
+#include "../../primitive/src/fibre_specular.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -104,9 +106,9 @@ std::vector<Eigen::Matrix3d> randomMatrices(std::mt19937& rng, int count) {
 
 SggxMatrix toSggx(const Eigen::Matrix3d& s) { return {s(0, 0), s(1, 1), s(2, 2), s(0, 1), s(0, 2), s(1, 2)}; }
 
-// The kernel's fibre gate (src/fibre_specular.h): needles thinner than 0.105 (n+1)^0.3 times the
-// lobe's width 1/√(n+1) take the fibre limit.
-double fibreGateRatio(double shininess) { return 0.105 * std::pow(shininess + 1, 0.3) / std::sqrt(shininess + 1); }
+// The kernel's fibre gate as an axis ratio (src/fibre_specular.h): needles thinner than
+// 0.105 (n+1)^0.3 times the lobe's width 1/√(n+1) take the fibre limit.
+double fibreGateRatio(double shininess) { return std::sqrt(vtex::primitive::detail::fibreEigenRatioGate(shininess)); }
 
 }  // namespace
 
