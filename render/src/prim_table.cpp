@@ -16,7 +16,18 @@ void corners(const ingest::QuadMesh& mesh, std::uint32_t face, std::array<Vec3, 
 
 }  // namespace
 
-Prim PrimTable::operator[](std::size_t i) const {
+void PrimTable::keepBuilt(std::size_t maxBytes) {
+    mBuilt.clear();
+    if (mFaces.size() > maxBytes / sizeof(Prim)) return;
+    std::vector<Prim> built;
+    built.reserve(mFaces.size());
+    for (std::size_t i = 0; i < mFaces.size(); ++i) built.push_back(build(i));
+    mBuilt = std::move(built);
+}
+
+Prim PrimTable::operator[](std::size_t i) const { return mBuilt.empty() ? build(i) : mBuilt[i]; }
+
+Prim PrimTable::build(std::size_t i) const {
     const Face& f = mFaces[i];
     const Surface& s = mSurfaces[f.surface];
     Prim prim;
@@ -36,12 +47,14 @@ Prim PrimTable::operator[](std::size_t i) const {
 TrilinearCell PrimTable::cell(std::size_t i) const {
     const Face& f = mFaces[i];
     const Surface& s = mSurfaces[f.surface];
+    if (!mBuilt.empty() && (s.cell || s.floor)) return mBuilt[i].cell;
     std::array<Vec3, 4> p, n;
     corners(*s.mesh, f.face, p, n);
     return TrilinearCell(p, n, s.height, s.under);
 }
 
 std::array<Vec3, 4> PrimTable::patch(std::size_t i) const {
+    if (!mBuilt.empty()) return mBuilt[i].p;
     const Face& f = mFaces[i];
     const Surface& s = mSurfaces[f.surface];
     std::array<Vec3, 4> p, n;
@@ -52,6 +65,7 @@ std::array<Vec3, 4> PrimTable::patch(std::size_t i) const {
 CellMap PrimTable::map(std::size_t i) const {
     const Face& f = mFaces[i];
     const Surface& s = mSurfaces[f.surface];
+    if (!mBuilt.empty() && (s.cell || s.floor)) return mBuilt[i].map;
     return makeCellMap(s.placing, drawFaceTransform(s.placing.perturb, f.face));
 }
 

@@ -1,8 +1,9 @@
 // The scene's primitives, one per base face, stored as what they are made from (a face of a base
 // mesh and the surface placing it), and put together on demand: a face's corners, normals,
-// trilinear cell and cell map take ~600 bytes in double precision, which a million faces cannot
-// afford (issue 18: a 10⁶-face base mesh within 300 MB), while rebuilding them costs a few dozen
-// operations, next to the six patch tests of a ray entering a cell.
+// trilinear cell and cell map take ~500 bytes in double precision, which a million faces cannot
+// afford (issue 18: a 10⁶-face base mesh within 300 MB), while rebuilding them costs a few hundred
+// instructions, next to the six patch tests of a ray entering a cell. Tables that fit a small
+// budget keep them built instead (keepBuilt).
 #pragma once
 
 #include <vtex/ingest/base_mesh.h>
@@ -49,6 +50,13 @@ public:
     /// Adds face `face` of surface `surface`'s mesh (its corners checked by the caller).
     void add(int surface, std::uint32_t face) { mFaces.push_back({std::uint32_t(surface), face}); }
 
+    /// Puts every primitive together once and keeps it, if the whole table takes at most
+    /// `maxBytes`: a bush field's 400 faces take 0.3 MB, and rebuilding a primitive (its cell's
+    /// corners, normals and map) for every ray that meets it was 4 % of its render. A mesh too
+    /// large for that (issue 18's million faces) keeps being put together on demand. Call once
+    /// the faces are added; operator[], cell() and map() then return copies of what is kept.
+    void keepBuilt(std::size_t maxBytes);
+
     std::size_t size() const { return mFaces.size(); }
     bool empty() const { return mFaces.empty(); }
     /// Primitive i, whole.
@@ -67,6 +75,9 @@ private:
     };
     std::vector<Surface> mSurfaces;
     std::vector<Face> mFaces;
+    std::vector<Prim> mBuilt;  ///< all primitives (keepBuilt), or empty
+
+    Prim build(std::size_t i) const;
 };
 
 }  // namespace vtex::render::detail

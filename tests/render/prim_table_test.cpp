@@ -1,6 +1,7 @@
 // PrimTable (render/src/prim_table.h): the primitives the renderers trace are put together from
-// the base meshes on demand; what it gives must be what the scene describes, built directly, in
-// all three of its forms (whole, the ray test's cell or patch alone, the map alone).
+// the base meshes, once and kept when the table is small, on demand otherwise; what it gives must
+// be what the scene describes, built directly, in all three of its forms (whole, the ray test's
+// cell or patch alone, the map alone), and the same whether kept or not.
 #include "fixtures.h"
 #include "../../render/src/footprint.h"
 #include "../../render/src/frame.h"
@@ -79,6 +80,38 @@ TEST(PrimTable, PrimitivesAreTheFacesTheSceneDescribes) {
             } else {
                 expectSame(prim.p, p, "corners", i);
             }
+        }
+    }
+}
+
+// A table small enough to be kept (keepBuilt, as buildSceneGeometry's is) gives what the same
+// table put together on demand gives, bit for bit, in every form.
+TEST(PrimTable, KeptPrimitivesAreThoseBuiltOnDemand) {
+    const Scene scene = primScene();
+    for (const bool floors : {false, true}) {
+        const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene, floors);
+        const detail::PrimTable& kept = geometry.tracer->prims();
+        detail::PrimTable onDemand = kept;
+        onDemand.keepBuilt(0);
+        for (std::size_t i = 0; i < kept.size(); ++i) {
+            const detail::Prim a = kept[i], b = onDemand[i];
+            EXPECT_EQ(a.index, b.index);
+            EXPECT_EQ(a.surface, b.surface);
+            EXPECT_EQ(a.face, b.face);
+            EXPECT_EQ(a.textured, b.textured);
+            expectSame(a.p, b.p, "corners", i);
+            expectSame(a.n, b.n, "normals", i);
+            if (!a.textured) expectSame(kept.patch(i), onDemand.patch(i), "patch", i);
+            if (!a.textured && !floors) continue;
+            for (std::size_t c = 0; c < 8; ++c) {
+                EXPECT_EQ(a.cell.corners()[c], b.cell.corners()[c]) << i;
+                EXPECT_EQ(kept.cell(i).corners()[c], onDemand.cell(i).corners()[c]) << i;
+            }
+            EXPECT_EQ(a.cell.size(), b.cell.size());
+            EXPECT_EQ(kept.map(i).a, onDemand.map(i).a);
+            EXPECT_EQ(kept.map(i).b, onDemand.map(i).b);
+            EXPECT_EQ(a.map.a, b.map.a);
+            EXPECT_EQ(a.map.b, b.map.b);
         }
     }
 }
