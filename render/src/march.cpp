@@ -4,6 +4,8 @@
 #include "march.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -62,33 +64,56 @@ void fillIndex(const octree::Octree& tree, const octree::OctreeNode& node, int l
         }
 }
 
-// The Chebyshev distances of a level (row-major, from its row-major voxel index), exactly. The
-// L∞ distance is separable: along x, then the max-min along y, then along z, each a search
-// outward that stops once the offset reaches the best distance found (x and y wrap, z does not).
-std::vector<std::uint8_t> exactDistances(const std::vector<std::uint32_t>& index, int n) {
+// One line of the Chebyshev transform below, n ≤ 64 voxels: f(i) = min_j max(|i − j|, g(j)),
+// capped at kFar, the offsets wrapping around the line or not. f(i) ≤ v exactly where the voxels
+// with g ≤ v, grown by v on both sides, reach; so each threshold v is one 64-bit mask, grown in
+// log2(v) steps (a set grown by a, joined with itself shifted by ±s, s ≤ a + 1, is grown by
+// a + s, without leaving the line between a voxel and what it reaches), and each voxel takes the
+// first threshold that reaches it. About a thirtieth of the outward search per voxel it replaces.
+void chebyshevLine(const std::uint8_t* g, std::uint8_t* f, int n, bool wrap) {
     constexpr int kFar = LevelGrid::kCap;
+    const std::uint64_t full = n == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;
+    std::array<std::uint64_t, kFar> at{};  // at[v]: the voxels with g = v
+    for (int i = 0; i < n; ++i)
+        if (g[i] < kFar) at[g[i]] |= std::uint64_t(1) << i;
+    const auto withShifts = [&](std::uint64_t x, int s) {  // x ∪ (x shifted by ±s)
+        if (wrap) {
+            s %= n;
+            return s == 0 ? x : x | (((x << s) | (x >> (n - s))) & full) | (((x >> s) | (x << (n - s))) & full);
+        }
+        return s >= n ? x : x | ((x << s) & full) | (x >> s);
+    };
+    std::uint64_t within = 0, reached = 0;  // within: the voxels with g ≤ v
+    std::fill(f, f + n, std::uint8_t(kFar));
+    for (int v = 0; v < kFar && reached != full; ++v) {
+        within |= at[std::size_t(v)];
+        std::uint64_t grown = within;
+        for (int a = 0; a < v && grown != full;) {
+            const int s = std::min(a + 1, v - a);
+            grown = withShifts(grown, s);
+            a += s;
+        }
+        for (std::uint64_t fresh = grown & ~reached; fresh; fresh &= fresh - 1) f[std::countr_zero(fresh)] = std::uint8_t(v);
+        reached |= grown;
+    }
+}
+
+// The Chebyshev distances of a level (row-major, from its row-major voxel index), exactly, for
+// levels of at most 64 voxels a side. The L∞ distance is separable: along x, then the max-min
+// along y, then along z (x and y wrap, z does not).
+std::vector<std::uint8_t> exactDistances(const std::vector<std::uint32_t>& index, int n) {
     const auto at = [n](int x, int y, int z) { return (std::size_t(z) * std::size_t(n) + std::size_t(y)) * std::size_t(n) + std::size_t(x); };
-    std::vector<std::uint8_t> d(index.size(), std::uint8_t(kFar));
+    std::vector<std::uint8_t> d(index.size(), std::uint8_t(LevelGrid::kCap));
     for (std::size_t i = 0; i < d.size(); ++i)
         if (index[i]) d[i] = 0;
-    std::vector<std::uint8_t> line(static_cast<std::size_t>(n));
+    std::array<std::uint8_t, 64> in{}, out{};
     const auto pass = [&](int axis) {
         for (int a = 0; a < n; ++a)
             for (int b = 0; b < n; ++b) {
                 const auto lineIndex = [&](int i) { return axis == 0 ? at(i, a, b) : axis == 1 ? at(a, i, b) : at(a, b, i); };
-                for (int i = 0; i < n; ++i) line[std::size_t(i)] = d[lineIndex(i)];
-                for (int i = 0; i < n; ++i) {
-                    int best = line[std::size_t(i)];
-                    for (int k = 1; k < best && k < n; ++k) {
-                        for (const int j : {i - k, i + k}) {
-                            int w = j;  // |j − i| = k < n: one period at most
-                            if (axis < 2) w = j < 0 ? j + n : j >= n ? j - n : j;
-                            else if (j < 0 || j >= n) continue;
-                            best = std::min(best, std::max(k, int(line[std::size_t(w)])));
-                        }
-                    }
-                    d[lineIndex(i)] = std::uint8_t(std::min(best, kFar));
-                }
+                for (int i = 0; i < n; ++i) in[std::size_t(i)] = d[lineIndex(i)];
+                chebyshevLine(in.data(), out.data(), n, axis < 2);
+                for (int i = 0; i < n; ++i) d[lineIndex(i)] = out[std::size_t(i)];
             }
     };
     pass(0);
@@ -102,6 +127,7 @@ std::vector<std::uint8_t> exactDistances(const std::vector<std::uint32_t>& index
 // D, the empty parents span at least 2(D − 1) child voxels on every side of any child inside it,
 // so the child's distance is at least 2D − 1 (a smaller distance only means a shorter leap).
 constexpr int kExactDistanceLevel = 6;
+static_assert(kExactDistanceLevel <= 6, "chebyshevLine holds a line of voxels in 64 bits");
 
 }  // namespace
 
