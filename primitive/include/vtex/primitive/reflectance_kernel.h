@@ -61,6 +61,7 @@ public:
 
 private:
     struct Lattice;
+    void setUpProjection(const Eigen::Vector3d& wk, const Eigen::Vector3d& wj, const Eigen::Vector3d& wi);
     void setUpLobe();
     std::pair<double, double> latticeSums(const Eigen::Vector3d& mk, const Eigen::Vector3d& mj, const Eigen::Vector3d& mi,
                                           double scale, double lobeRatio, bool wantSpecular) const;
@@ -84,7 +85,7 @@ private:
     double mFibreGate = 0;  ///< the largest λ₁/λ₂ the fibre limit takes (src/fibre_specular.h)
     /// Strategy B's half vectors in (wk, wj, wi) and their (N·l) cosⁿα; 0 for those facing
     /// away from v, whose normal is then v.
-    alignas(16) std::array<double, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe
+    alignas(16) std::array<float, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe
     int mLobeCount = 0;  ///< how many face v
 };
 
