@@ -67,7 +67,6 @@ private:
                                           double scale, double lobeRatio, bool wantSpecular) const;
     double lobeSum(double mkx, double mjx, double mjy, const Eigen::Vector3d& Mi, double detC) const;
     double power(double c) const;                   ///< cⁿ: by squaring for a whole n ≤ 1024
-    void powers(std::array<float, 8>& c) const;  ///< the same on the fibre rule's 8 lanes, in place
     const Lattice* mLattice;
     /// S in the orthonormal basis (wk, wj, wi = view) as a linear map of S's six entries
     /// (xx, yy, zz, xy, xz, yz) to (kk, jj, ii, kj, ki, ji): row e holds the six outputs'
