@@ -82,22 +82,22 @@ const std::array<double, 65> kCosCutoffs = [] {
     return c;
 }();
 
-// The fibre limit's set-up and nodes (fibre_specular.h), compiled for AVX2 as well and chosen
-// at load time where the processor has it: the same SSE2 code in VEX encoding, whose
-// three-operand instructions save the register copies and spills that the 16 two-operand
-// registers force on the rules' loop (~a third of its instructions). Every lane rounds as in the
-// SSE2 build ("avx2" enables no FMA instruction to contract into), so both give the same bits.
-#if defined(__x86_64__) && defined(__has_attribute)
-#if __has_attribute(target_clones) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-__attribute__((target_clones("avx2", "default"), flatten))
-#endif
-#endif
+// The fibre limit's set-up and nodes (fibre_specular.h), for the kernel's frame (v = z).
 std::optional<double> fibreFactor(const Eigen::Matrix3d& s, const Eigen::Vector3d& l, double eigenRatioGate, double cosCutoff,
                                   int wholePower, double shininess) {
     return detail::fibreSpecular(s, l, Eigen::Vector3d(0, 0, 1), eigenRatioGate, cosCutoff, {wholePower, shininess});
 }
 
 }  // namespace
+
+// Set-up and evaluation in SSE2 and AVX2 builds (Clones, at the end of this file).
+struct ReflectanceKernel::Clones {
+    static void setUp(ReflectanceKernel& k, const Vector3d& wk, const Vector3d& wj, const Vector3d& wi);
+    static void setUpLobe(ReflectanceKernel& k);
+    static ReflectanceFactors evaluate(const ReflectanceKernel& k, const SggxMatrix& s);
+};
+
+ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const { return Clones::evaluate(*this, s); }
 
 double ReflectanceKernel::power(double c) const {
     if (mWholePower < 0) return std::pow(c, mShininess);
@@ -121,7 +121,7 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
     const double b = view.x() * view.y() * a;
     const Vector3d wk(1 + sign * view.x() * view.x() * a, sign * b, -sign * view.x());
     const Vector3d wj(b, sign + view.y() * view.y() * a, -view.y());
-    setUpProjection(wk, wj, view);
+    Clones::setUp(*this, wk, wj, view);
     mLight = Eigen::Vector3f(float(light.dot(wk)), float(light.dot(wj)), float(light.dot(view)));
     // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
     mCosCutoff = float(shininess <= 0        ? 0.0
@@ -129,12 +129,12 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
                                              : std::pow(1e-6, 1 / shininess));
     mDiffuseScale = mLattice->diffuseScale;
     mSpecularScale = (shininess + 2) / (2 * std::numbers::pi) / mLattice->n;
-    if (specular && shininess >= 0) setUpLobe();
+    if (specular && shininess >= 0) Clones::setUpLobe(*this);
 }
 
 // pᵀSq over S's entries for the six pairs (p, q) of basis vectors: the diagonal entries once,
 // the off-diagonal ones for both halves.
-void ReflectanceKernel::setUpProjection(const Vector3d& wk, const Vector3d& wj, const Vector3d& wi) {
+inline void ReflectanceKernel::setUpProjection(const Vector3d& wk, const Vector3d& wj, const Vector3d& wi) {
 #if defined(__SSE2__)
     // Two outputs at a time, the same products as the scalar loop below: P and Q hold, for one
     // coordinate c, the pairs' c components, outputs (kk, jj, ii, kj, ki, ji) in order.
@@ -181,7 +181,7 @@ void ReflectanceKernel::setUpProjection(const Vector3d& wk, const Vector3d& wj, 
 // Strategy B: the half vector between l and each of the lobe's mirror directions r (in the
 // kernel's frame, where v = (0, 0, 1)); those facing away from v see nothing: their term is 0
 // (and their normal v, which keeps the weights' arithmetic finite).
-void ReflectanceKernel::setUpLobe() {
+inline void ReflectanceKernel::setUpLobe() {
     const LobeLattice& lobe = LobeLattice::forShininess(mShininess);
     const float lx = mLight.x(), ly = mLight.y(), lz = mLight.z();
 #if defined(__SSE2__)
@@ -225,7 +225,7 @@ void ReflectanceKernel::setUpLobe() {
 // with ratio = K term |det C| |q|⁴ / q_z, written with one division. Four points at a time in
 // single precision: |q|⁴ reaches 1e16 on needles at the axis-ratio floor, well inside float's
 // range (3e38), and a lane that overflows is dropped (its weight there is B's alone, ≈ 0).
-double ReflectanceKernel::lobeSum(double mkx, double mjx, double mjy, const Vector3d& Mi, double detC) const {
+inline double ReflectanceKernel::lobeSum(double mkx, double mjx, double mjy, const Vector3d& Mi, double detC) const {
 #if defined(__SSE2__)
     const __m128 ik = _mm_set1_ps(float(1 / mkx)), ij = _mm_set1_ps(float(1 / mjy)), ii = _mm_set1_ps(float(1 / Mi.z()));
     const __m128 mix = _mm_set1_ps(float(Mi.x())), miy = _mm_set1_ps(float(Mi.y())), jx = _mm_set1_ps(float(mjx));
@@ -261,7 +261,7 @@ double ReflectanceKernel::lobeSum(double mkx, double mjx, double mjy, const Vect
 #endif
 }
 
-ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
+inline ReflectanceFactors ReflectanceKernel::evaluate(const SggxMatrix& s) const {
     const double entries[6] = {s.xx, s.yy, s.zz, s.xy, s.xz, s.yz};
     alignas(16) double t[6] = {};
 #if defined(__SSE2__)
@@ -321,7 +321,7 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
 
 // Strategy A's sums over the lattice: Σ (N·l)⁺ and Σ (N·l)⁺cosⁿα / (1 + ratio), the second with
 // B's balance weight (ratio = K_B p_B / K_A p_A; lobeRatio 0 without B).
-std::pair<double, double> ReflectanceKernel::latticeSums(const Vector3d& Mk, const Vector3d& Mj, const Vector3d& Mi,
+inline std::pair<double, double> ReflectanceKernel::latticeSums(const Vector3d& Mk, const Vector3d& Mj, const Vector3d& Mi,
                                                          double scale, double lobeRatio, bool wantSpecular) const {
     const Lattice& points = *mLattice;
     // m = u·Mk + v·Mj + w·Mi with Mk = (·,0,0), Mj = (·,·,0): written out. The sum runs in
@@ -399,5 +399,29 @@ ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light, c
                                    bool specular) {
     return ReflectanceKernel(light, view, shininess, samples, specular)(s);
 }
+
+// The kernel's set-up and evaluation are compiled for AVX2 as well and chosen at load time where
+// the processor has it (as in ellipsoid.cpp): the same SSE2 intrinsics in VEX encoding, whose
+// three-operand instructions save the register copies and spills that 16 two-operand registers
+// force on the lattice's and the fibre's loops. Every lane rounds as in the SSE2 build, in the
+// same order ("avx2" enables no FMA instruction to contract into): both give the same bits.
+// `flatten` inlines the member functions each calls into the clone.
+#if defined(__x86_64__) && defined(__has_attribute)
+#if __has_attribute(target_clones) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#define VTEX_KERNEL_CLONES __attribute__((target_clones("avx2", "default"), flatten))
+#endif
+#endif
+#ifndef VTEX_KERNEL_CLONES
+#define VTEX_KERNEL_CLONES
+#endif
+VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUp(ReflectanceKernel& k, const Vector3d& wk, const Vector3d& wj,
+                                                         const Vector3d& wi) {
+    k.setUpProjection(wk, wj, wi);
+}
+VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUpLobe(ReflectanceKernel& k) { k.setUpLobe(); }
+VTEX_KERNEL_CLONES ReflectanceFactors ReflectanceKernel::Clones::evaluate(const ReflectanceKernel& k, const SggxMatrix& s) {
+    return k.evaluate(s);
+}
+#undef VTEX_KERNEL_CLONES
 
 }  // namespace vtex::primitive

@@ -61,6 +61,8 @@ public:
 
 private:
     struct Lattice;
+    struct Clones;  ///< set-up and evaluation compiled for SSE2 and AVX2 (reflectance_kernel.cpp)
+    ReflectanceFactors evaluate(const SggxMatrix& s) const;
     void setUpProjection(const Eigen::Vector3d& wk, const Eigen::Vector3d& wj, const Eigen::Vector3d& wi);
     void setUpLobe();
     std::pair<double, double> latticeSums(const Eigen::Vector3d& mk, const Eigen::Vector3d& mj, const Eigen::Vector3d& mi,
