@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <utility>
 
 #if defined(__SSE2__)
@@ -82,11 +83,6 @@ const std::array<double, 65> kCosCutoffs = [] {
     return c;
 }();
 
-// The fibre limit's set-up and nodes (fibre_specular.h), for the kernel's frame (v = z).
-std::optional<double> fibreFactor(const Eigen::Matrix3d& s, const Eigen::Vector3d& l, double eigenRatioGate, double cosCutoff,
-                                  int wholePower, double shininess) {
-    return detail::fibreSpecular(s, l, Eigen::Vector3d(0, 0, 1), eigenRatioGate, cosCutoff, {wholePower, shininess});
-}
 
 }  // namespace
 
@@ -307,7 +303,8 @@ inline ReflectanceFactors ReflectanceKernel::evaluate(const SggxMatrix& s) const
                                              det, mFibreGate)) {
         Eigen::Matrix3d sFrame;
         sFrame << Skk, Skj, Ski, Skj, Sjj, Sji, Ski, Sji, Sii;
-        fibre = fibreFactor(sFrame, mLight.cast<double>(), mFibreGate, mCosCutoff, mWholePower, mShininess);
+        fibre = detail::needleSpecular(sFrame, detail::adjugate(sFrame), mLight.cast<double>(), Vector3d(0, 0, 1), mCosCutoff,
+                                       {mWholePower, mShininess});
     }
     const bool mis = mSpecular && !fibre && mLobeCount > 0 && detC > 0;
     const double lobeRatio = mis ? mLobeRatio * detC / (scale * scale * scale) : 0;
