@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <utility>
 
 #if defined(__SSE2__)
@@ -33,6 +34,7 @@ struct ReflectanceKernel::Lattice {
             z[std::size_t(i)] = float(std::sqrt(std::max(0.0, 1 - px * px - py * py)));
         }
     }
+    double diffuseScale = 1 / (n * std::numbers::pi);  ///< Σ (N·l)⁺ / n over π
 };
 
 namespace {
@@ -45,7 +47,8 @@ namespace {
 struct LobeLattice {
     static constexpr int kCount = ReflectanceKernel::kLobeSamples;
     double shininess = -1;
-    std::array<double, kCount> x{}, y{}, z{}, cosPower{};  ///< r = (sin α cos φ, sin α sin φ, cos α); cosⁿα
+    /// r = (sin α cos φ, sin α sin φ, cos α) and cosⁿα, in single precision for setUpLobe's 4-wide loop
+    alignas(16) std::array<float, kCount> x{}, y{}, z{}, cosPower{};
     double fibreGate = 0;  ///< detail::fibreEigenRatioGate(n): a pow, so kept with the lobe's points
     static const LobeLattice& forShininess(double n) {
         thread_local LobeLattice cached;
@@ -55,10 +58,10 @@ struct LobeLattice {
                 const double xi = (double(k) + 0.5) / kCount;
                 const double cosAlpha = std::pow(xi, 1 / (n + 1));
                 const double sinAlpha = std::sqrt(std::max(0.0, 1 - cosAlpha * cosAlpha));
-                cached.x[k] = sinAlpha * std::cos(golden * double(k));
-                cached.y[k] = sinAlpha * std::sin(golden * double(k));
-                cached.z[k] = cosAlpha;
-                cached.cosPower[k] = std::pow(xi, n / (n + 1));  // cosⁿα
+                cached.x[k] = float(sinAlpha * std::cos(golden * double(k)));
+                cached.y[k] = float(sinAlpha * std::sin(golden * double(k)));
+                cached.z[k] = float(cosAlpha);
+                cached.cosPower[k] = float(std::pow(xi, n / (n + 1)));  // cosⁿα
             }
             cached.fibreGate = detail::fibreEigenRatioGate(n);
             cached.shininess = n;
@@ -68,8 +71,9 @@ struct LobeLattice {
 };
 
 // The shininess as a whole number in [0, 1024], for which xⁿ is taken by repeated squaring
-// (exact to a few ulps, ~6 multiplies instead of a libm pow); −1 otherwise.
-int wholePower(double n) { return n >= 0 && n <= 1024 && n == std::floor(n) ? int(n) : -1; }
+// (exact to a few ulps, ~6 multiplies instead of a libm pow); −1 otherwise. (std::floor is a
+// libm call on SSE2: the round trip through int is the same test for n in range.)
+int wholePower(double n) { return n >= 0 && n <= 1024 && double(int(n)) == n ? int(n) : -1; }
 
 // pow(1e-6, 1/n) for whole n ≤ 64 (n = 0 unused), beyond which n is clamped to 64: a lower
 // cut-off only keeps more terms.
@@ -79,7 +83,17 @@ const std::array<double, 65> kCosCutoffs = [] {
     return c;
 }();
 
+
 }  // namespace
+
+// Set-up and evaluation in SSE2 and AVX2 builds (Clones, at the end of this file).
+struct ReflectanceKernel::Clones {
+    static void setUp(ReflectanceKernel& k, const Vector3d& wk, const Vector3d& wj, const Vector3d& wi);
+    static void setUpLobe(ReflectanceKernel& k);
+    static ReflectanceFactors evaluate(const ReflectanceKernel& k, const SggxMatrix& s);
+};
+
+ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const { return Clones::evaluate(*this, s); }
 
 double ReflectanceKernel::power(double c) const {
     if (mWholePower < 0) return std::pow(c, mShininess);
@@ -91,37 +105,63 @@ double ReflectanceKernel::power(double c) const {
     return result;
 }
 
-// cⁿ lane by lane: by squaring for a whole n (a loop the compiler vectorises), else libm's pow
-// where the lane counts (c > 0).
-void ReflectanceKernel::powers(detail::FibreLanes& c) const {
-    if (mWholePower < 0) {
-        for (float& x : c) x = x > 0 ? float(std::pow(double(x), mShininess)) : 0.0f;
-        return;
-    }
-    detail::FibreLanes result;
-    result.fill(1.0f);
-    for (int e = mWholePower; e > 0; e >>= 1) {
-        if (e & 1)
-            for (std::size_t k = 0; k < c.size(); ++k) result[k] *= c[k];
-        for (float& x : c) x *= x;
-    }
-    c = result;
-}
-
 ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view, double shininess, int samples,
                                      bool specular)
     : mShininess(shininess), mWholePower(wholePower(shininess)), mSpecular(specular) {
-    static const Lattice l8(8), l16(16), l32(32), l64(64);
-    mLattice = samples <= 8 ? &l8 : samples <= 16 ? &l16 : samples <= 32 ? &l32 : &l64;
+    // One guard for the four lattices (a call to reflectanceFast builds a kernel each time).
+    static const std::array<Lattice, 4> lattices{Lattice(8), Lattice(16), Lattice(32), Lattice(64)};
+    mLattice = &lattices[samples <= 8 ? 0 : samples <= 16 ? 1 : samples <= 32 ? 2 : 3];
     // Orthonormal basis (wk, wj, wi) with wi = view (Frisvad/Duff's branchless construction).
     const double sign = std::copysign(1.0, view.z());
     const double a = -1.0 / (sign + view.z());
     const double b = view.x() * view.y() * a;
     const Vector3d wk(1 + sign * view.x() * view.x() * a, sign * b, -sign * view.x());
     const Vector3d wj(b, sign + view.y() * view.y() * a, -view.y());
-    // pᵀSq over S's entries: the diagonal ones once, the off-diagonal ones for both halves.
+    Clones::setUp(*this, wk, wj, view);
+    mLight = Eigen::Vector3f(float(light.dot(wk)), float(light.dot(wj)), float(light.dot(view)));
+    // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
+    mCosCutoff = float(shininess <= 0        ? 0.0
+                       : mWholePower >= 0    ? kCosCutoffs[std::size_t(std::min(mWholePower, 64))]
+                                             : std::pow(1e-6, 1 / shininess));
+    mDiffuseScale = mLattice->diffuseScale;
+    mSpecularScale = (shininess + 2) / (2 * std::numbers::pi) / mLattice->n;
+    if (specular && shininess >= 0) Clones::setUpLobe(*this);
+}
+
+// pᵀSq over S's entries for the six pairs (p, q) of basis vectors: the diagonal entries once,
+// the off-diagonal ones for both halves.
+inline void ReflectanceKernel::setUpProjection(const Vector3d& wk, const Vector3d& wj, const Vector3d& wi) {
+#if defined(__SSE2__)
+    // Two outputs at a time, the same products as the scalar loop below: P and Q hold, for one
+    // coordinate c, the pairs' c components, outputs (kk, jj, ii, kj, ki, ji) in order.
+    struct Six {
+        __m128d o01, o23, o45;
+    };
+    const auto p = [&](int c) { return Six{_mm_set_pd(wj[c], wk[c]), _mm_set_pd(wk[c], wi[c]), _mm_set_pd(wj[c], wk[c])}; };
+    const auto q = [&](int c) { return Six{_mm_set_pd(wj[c], wk[c]), _mm_set_pd(wj[c], wi[c]), _mm_set1_pd(wi[c])}; };
+    const Six px = p(0), py = p(1), pz = p(2), qx = q(0), qy = q(1), qz = q(2);
+    const auto store = [this](std::size_t row, __m128d o01, __m128d o23, __m128d o45) {
+        _mm_store_pd(&mProjection[6 * row], o01);
+        _mm_store_pd(&mProjection[6 * row + 2], o23);
+        _mm_store_pd(&mProjection[6 * row + 4], o45);
+    };
+    const auto square = [&](std::size_t row, const Six& a, const Six& b) {
+        store(row, _mm_mul_pd(a.o01, b.o01), _mm_mul_pd(a.o23, b.o23), _mm_mul_pd(a.o45, b.o45));
+    };
+    const auto mixed = [&](std::size_t row, const Six& pa, const Six& qb, const Six& pb, const Six& qa) {
+        store(row, _mm_add_pd(_mm_mul_pd(pa.o01, qb.o01), _mm_mul_pd(pb.o01, qa.o01)),
+              _mm_add_pd(_mm_mul_pd(pa.o23, qb.o23), _mm_mul_pd(pb.o23, qa.o23)),
+              _mm_add_pd(_mm_mul_pd(pa.o45, qb.o45), _mm_mul_pd(pb.o45, qa.o45)));
+    };
+    square(0, px, qx);
+    square(1, py, qy);
+    square(2, pz, qz);
+    mixed(3, px, qy, py, qx);
+    mixed(4, px, qz, pz, qx);
+    mixed(5, py, qz, pz, qy);
+#else
     const std::array<std::pair<const Vector3d&, const Vector3d&>, 6> outputs{
-        {{wk, wk}, {wj, wj}, {view, view}, {wk, wj}, {wk, view}, {wj, view}}};
+        {{wk, wk}, {wj, wj}, {wi, wi}, {wk, wj}, {wk, wi}, {wj, wi}}};
     for (std::size_t o = 0; o < 6; ++o) {
         const auto& [p, q] = outputs[o];
         mProjection[o] = p.x() * q.x();
@@ -131,45 +171,40 @@ ReflectanceKernel::ReflectanceKernel(const Vector3d& light, const Vector3d& view
         mProjection[24 + o] = p.x() * q.z() + p.z() * q.x();
         mProjection[30 + o] = p.y() * q.z() + p.z() * q.y();
     }
-    mLight = Eigen::Vector3f(float(light.dot(wk)), float(light.dot(wj)), float(light.dot(view)));
-    // cosⁿα below 1e-6 of its peak is dropped: pow is the costliest step of the loop.
-    mCosCutoff = float(shininess <= 0        ? 0.0
-                       : mWholePower >= 0    ? kCosCutoffs[std::size_t(std::min(mWholePower, 64))]
-                                             : std::pow(1e-6, 1 / shininess));
-    mDiffuseScale = 1 / (mLattice->n * std::numbers::pi);
-    mSpecularScale = (shininess + 2) / (2 * std::numbers::pi) / mLattice->n;
-    if (specular && shininess >= 0) setUpLobe();
+#endif
 }
 
 // Strategy B: the half vector between l and each of the lobe's mirror directions r (in the
 // kernel's frame, where v = (0, 0, 1)); those facing away from v see nothing: their term is 0
 // (and their normal v, which keeps the weights' arithmetic finite).
-void ReflectanceKernel::setUpLobe() {
+inline void ReflectanceKernel::setUpLobe() {
     const LobeLattice& lobe = LobeLattice::forShininess(mShininess);
-    const double lx = mLight.x(), ly = mLight.y(), lz = mLight.z();
+    const float lx = mLight.x(), ly = mLight.y(), lz = mLight.z();
 #if defined(__SSE2__)
-    // Two points at a time: this runs once per kernel, but reflectanceFast builds one per call.
-    const __m128d vlx = _mm_set1_pd(lx), vly = _mm_set1_pd(ly), vlz = _mm_set1_pd(lz);
-    const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1), tiny = _mm_set1_pd(1e-24);
-    for (std::size_t k = 0; k < std::size_t(kLobeSamples); k += 2) {
-        const __m128d x = _mm_add_pd(vlx, _mm_loadu_pd(&lobe.x[k])), y = _mm_add_pd(vly, _mm_loadu_pd(&lobe.y[k]));
-        const __m128d z = _mm_add_pd(vlz, _mm_loadu_pd(&lobe.z[k]));
-        const __m128d length2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)), _mm_mul_pd(z, z));
-        const __m128d faces = _mm_and_pd(_mm_cmpgt_pd(length2, tiny), _mm_cmpgt_pd(z, zero));
-        const __m128d inverse = _mm_and_pd(faces, _mm_div_pd(one, _mm_sqrt_pd(_mm_max_pd(length2, tiny))));
-        _mm_store_pd(&mLobeX[k], _mm_mul_pd(x, inverse));
-        _mm_store_pd(&mLobeY[k], _mm_mul_pd(y, inverse));
-        _mm_store_pd(&mLobeZ[k], _mm_or_pd(_mm_and_pd(faces, _mm_mul_pd(z, inverse)), _mm_andnot_pd(faces, one)));
-        const __m128d nl = _mm_mul_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(x, vlx), _mm_mul_pd(y, vly)), _mm_mul_pd(z, vlz)), inverse);
-        _mm_store_pd(&mLobeTerm[k], _mm_mul_pd(nl, _mm_loadu_pd(&lobe.cosPower[k])));
-        mLobeCount += (_mm_movemask_pd(faces) & 1) + (_mm_movemask_pd(faces) >> 1);
+    // Four points at a time in single precision, as the light (mLight) already is: this runs
+    // once per kernel, but reflectanceFast builds one per call.
+    const __m128 vlx = _mm_set1_ps(lx), vly = _mm_set1_ps(ly), vlz = _mm_set1_ps(lz);
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1), tiny = _mm_set1_ps(1e-24f);
+    for (std::size_t k = 0; k < std::size_t(kLobeSamples); k += 4) {
+        const __m128 x = _mm_add_ps(vlx, _mm_load_ps(&lobe.x[k])), y = _mm_add_ps(vly, _mm_load_ps(&lobe.y[k]));
+        const __m128 z = _mm_add_ps(vlz, _mm_load_ps(&lobe.z[k]));
+        const __m128 length2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)), _mm_mul_ps(z, z));
+        const __m128 faces = _mm_and_ps(_mm_cmpgt_ps(length2, tiny), _mm_cmpgt_ps(z, zero));
+        const __m128 inverse = _mm_and_ps(faces, _mm_div_ps(one, _mm_sqrt_ps(_mm_max_ps(length2, tiny))));
+        _mm_store_ps(&mLobeX[k], _mm_mul_ps(x, inverse));
+        _mm_store_ps(&mLobeY[k], _mm_mul_ps(y, inverse));
+        _mm_store_ps(&mLobeZ[k], _mm_or_ps(_mm_and_ps(faces, _mm_mul_ps(z, inverse)), _mm_andnot_ps(faces, one)));
+        const __m128 nl = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(x, vlx), _mm_mul_ps(y, vly)), _mm_mul_ps(z, vlz)), inverse);
+        _mm_store_ps(&mLobeTerm[k], _mm_mul_ps(nl, _mm_load_ps(&lobe.cosPower[k])));
+        const int mask = _mm_movemask_ps(faces);  // popcount is a libgcc call without SSE4.2
+        mLobeCount += (mask & 1) + (mask >> 1 & 1) + (mask >> 2 & 1) + (mask >> 3);
     }
 #else
     for (std::size_t k = 0; k < std::size_t(kLobeSamples); ++k) {
-        const double x = lx + lobe.x[k], y = ly + lobe.y[k], z = lz + lobe.z[k];
-        const double length = std::sqrt(x * x + y * y + z * z);
-        const bool faces = length > 1e-12 && z > 0;
-        const double inverse = faces ? 1 / length : 0;
+        const float x = lx + lobe.x[k], y = ly + lobe.y[k], z = lz + lobe.z[k];
+        const float length2 = x * x + y * y + z * z;
+        const bool faces = length2 > 1e-24f && z > 0;
+        const float inverse = faces ? 1 / std::sqrt(length2) : 0;
         mLobeX[k] = x * inverse;
         mLobeY[k] = y * inverse;
         mLobeZ[k] = faces ? z * inverse : 1;
@@ -183,45 +218,46 @@ void ReflectanceKernel::setUpLobe() {
 
 // Strategy B's sum: each half vector's pre-image q = C⁻¹N (back substitution), at which A's
 // density is (q_z/|q|)/π and B's is (n+1)/2π cosⁿα 4(N·l) · |det C| |q|³; term / (1 + ratio)
-// with ratio = K term |det C| |q|⁴ / q_z, written with one division. Two points at a time in
-// double precision: |q|⁴ reaches 1e16 on needles at the axis-ratio floor.
-double ReflectanceKernel::lobeSum(double mkx, double mjx, double mjy, const Vector3d& Mi, double detC) const {
+// with ratio = K term |det C| |q|⁴ / q_z, written with one division. Four points at a time in
+// single precision: |q|⁴ reaches 1e16 on needles at the axis-ratio floor, well inside float's
+// range (3e38), and a lane that overflows is dropped (its weight there is B's alone, ≈ 0).
+inline double ReflectanceKernel::lobeSum(double mkx, double mjx, double mjy, const Vector3d& Mi, double detC) const {
+#if defined(__SSE2__)
+    const __m128 ik = _mm_set1_ps(float(1 / mkx)), ij = _mm_set1_ps(float(1 / mjy)), ii = _mm_set1_ps(float(1 / Mi.z()));
+    const __m128 mix = _mm_set1_ps(float(Mi.x())), miy = _mm_set1_ps(float(Mi.y())), jx = _mm_set1_ps(float(mjx));
+    const __m128 f = _mm_set1_ps(float(mLobeRatio * detC)), infinity = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    const __m128 absMask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    __m128 sum = _mm_setzero_ps();
+    for (std::size_t k = 0; k < std::size_t(kLobeSamples); k += 4) {
+        const __m128 qz = _mm_mul_ps(_mm_load_ps(&mLobeZ[k]), ii);
+        const __m128 qy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&mLobeY[k]), _mm_mul_ps(miy, qz)), ij);
+        const __m128 qx = _mm_mul_ps(_mm_sub_ps(_mm_sub_ps(_mm_load_ps(&mLobeX[k]), _mm_mul_ps(jx, qy)), _mm_mul_ps(mix, qz)), ik);
+        const __m128 q2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(qx, qx), _mm_mul_ps(qy, qy)), _mm_mul_ps(qz, qz));
+        const __m128 term = _mm_load_ps(&mLobeTerm[k]);
+        const __m128 c = _mm_div_ps(_mm_mul_ps(term, qz), _mm_add_ps(qz, _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(f, q2), q2), term)));
+        // Overflow on a degenerate S counts nothing (an ordered, finite contribution only).
+        sum = _mm_add_ps(sum, _mm_and_ps(_mm_cmplt_ps(_mm_and_ps(c, absMask), infinity), c));
+    }
+    alignas(16) float parts[4];
+    _mm_store_ps(parts, sum);
+    return double(parts[0]) + double(parts[1]) + double(parts[2]) + double(parts[3]);
+#else
     const double inverseK = 1 / mkx, inverseJ = 1 / mjy, inverseI = 1 / Mi.z();
     const double factor = mLobeRatio * detC;
-#if defined(__SSE2__)
-    const __m128d ik = _mm_set1_pd(inverseK), ij = _mm_set1_pd(inverseJ), ii = _mm_set1_pd(inverseI);
-    const __m128d mix = _mm_set1_pd(Mi.x()), miy = _mm_set1_pd(Mi.y()), jx = _mm_set1_pd(mjx);
-    const __m128d f = _mm_set1_pd(factor), infinity = _mm_set1_pd(std::numeric_limits<double>::infinity());
-    const __m128d absMask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffff));
-    __m128d sum = _mm_setzero_pd();
-    for (std::size_t k = 0; k < std::size_t(kLobeSamples); k += 2) {
-        const __m128d qz = _mm_mul_pd(_mm_load_pd(&mLobeZ[k]), ii);
-        const __m128d qy = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(&mLobeY[k]), _mm_mul_pd(miy, qz)), ij);
-        const __m128d qx = _mm_mul_pd(_mm_sub_pd(_mm_sub_pd(_mm_load_pd(&mLobeX[k]), _mm_mul_pd(jx, qy)), _mm_mul_pd(mix, qz)), ik);
-        const __m128d q2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(qx, qx), _mm_mul_pd(qy, qy)), _mm_mul_pd(qz, qz));
-        const __m128d term = _mm_load_pd(&mLobeTerm[k]);
-        const __m128d c = _mm_div_pd(_mm_mul_pd(term, qz), _mm_add_pd(qz, _mm_mul_pd(_mm_mul_pd(f, term), _mm_mul_pd(q2, q2))));
-        // Overflow on a degenerate S counts nothing (an ordered, finite contribution only).
-        sum = _mm_add_pd(sum, _mm_and_pd(_mm_cmplt_pd(_mm_and_pd(c, absMask), infinity), c));
-    }
-    alignas(16) double halves[2];
-    _mm_store_pd(halves, sum);
-    return halves[0] + halves[1];
-#else
     double sum = 0;
     for (std::size_t k = 0; k < std::size_t(kLobeSamples); ++k) {
         const double qz = mLobeZ[k] * inverseI;
         const double qy = (mLobeY[k] - Mi.y() * qz) * inverseJ;
         const double qx = (mLobeX[k] - mjx * qy - Mi.x() * qz) * inverseK;
         const double q2 = qx * qx + qy * qy + qz * qz, term = mLobeTerm[k];
-        const double contribution = term * qz / (qz + factor * term * q2 * q2);
+        const double contribution = term * qz / (qz + factor * q2 * q2 * term);
         if (std::isfinite(contribution)) sum += contribution;
     }
     return sum;
 #endif
 }
 
-ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
+inline ReflectanceFactors ReflectanceKernel::evaluate(const SggxMatrix& s) const {
     const double entries[6] = {s.xx, s.yy, s.zz, s.xy, s.xz, s.yz};
     alignas(16) double t[6] = {};
 #if defined(__SSE2__)
@@ -260,13 +296,15 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
     const double detC = Mk.x() * Mj.y() * Mi.z();
     const double scale = Mi.z();  // = √Sii: folded into the float terms to keep them O(1)
     std::optional<double> fibre;
-    if (mSpecular) {
-        // A needle much thinner than the lobe: neither strategy finds the short arc where the
-        // lobe crosses its circle of normals; the fibre limit integrates along that circle.
+    // A needle much thinner than the lobe: neither strategy finds the short arc where the lobe
+    // crosses its circle of normals; the fibre limit integrates along that circle. The gate is
+    // tested first with the invariants above (adj S's diagonal: rawBlockDet and two more minors).
+    if (mSpecular && detail::takesFibreLimit(Skk + Sjj + Sii, rawBlockDet + (Skk * Sii - Ski * Ski) + (Skk * Sjj - Skj * Skj),
+                                             det, mFibreGate)) {
         Eigen::Matrix3d sFrame;
         sFrame << Skk, Skj, Ski, Skj, Sjj, Sji, Ski, Sji, Sii;
-        fibre = detail::fibreSpecular(sFrame, mLight.cast<double>(), Vector3d(0, 0, 1), mShininess, mFibreGate, mCosCutoff,
-                                      [this](detail::FibreLanes& c) { powers(c); });
+        fibre = detail::needleSpecular(sFrame, detail::adjugate(sFrame), mLight.cast<double>(), Vector3d(0, 0, 1), mCosCutoff,
+                                       {mWholePower, mShininess});
     }
     const bool mis = mSpecular && !fibre && mLobeCount > 0 && detC > 0;
     const double lobeRatio = mis ? mLobeRatio * detC / (scale * scale * scale) : 0;
@@ -280,7 +318,7 @@ ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const {
 
 // Strategy A's sums over the lattice: Σ (N·l)⁺ and Σ (N·l)⁺cosⁿα / (1 + ratio), the second with
 // B's balance weight (ratio = K_B p_B / K_A p_A; lobeRatio 0 without B).
-std::pair<double, double> ReflectanceKernel::latticeSums(const Vector3d& Mk, const Vector3d& Mj, const Vector3d& Mi,
+inline std::pair<double, double> ReflectanceKernel::latticeSums(const Vector3d& Mk, const Vector3d& Mj, const Vector3d& Mi,
                                                          double scale, double lobeRatio, bool wantSpecular) const {
     const Lattice& points = *mLattice;
     // m = u·Mk + v·Mj + w·Mi with Mk = (·,0,0), Mj = (·,·,0): written out. The sum runs in
@@ -314,22 +352,8 @@ std::pair<double, double> ReflectanceKernel::latticeSums(const Vector3d& Mk, con
         const __m128 specular = _mm_and_ps(lit, _mm_cmpgt_ps(cosAlpha, cut));
         // Most groups of a call have no point in the lobe.
         if (_mm_movemask_ps(specular) == 0) continue;
-        __m128 p;
-        if (mWholePower >= 0) {
-            p = one;
-            __m128 base = cosAlpha;
-            for (int e = mWholePower; e > 0; e >>= 1) {
-                if (e & 1) p = _mm_mul_ps(p, base);
-                base = _mm_mul_ps(base, base);
-            }
-        } else {
-            // libm's pow only where it counts: it costs more than the rest of the call.
-            alignas(16) float c[4];
-            _mm_store_ps(c, cosAlpha);
-            const int lanes = _mm_movemask_ps(specular);
-            for (int k = 0; k < 4; ++k) c[k] = lanes & (1 << k) ? float(std::pow(double(c[k]), mShininess)) : 0.0f;
-            p = _mm_load_ps(c);
-        }
+        // libm's pow (a non-whole n) only where it counts: it costs more than the rest of the call.
+        const __m128 p = detail::powerLanes(cosAlpha, specular, {mWholePower, mShininess});
         const __m128 term = _mm_mul_ps(nl, p);
         const __m128 s = _mm_mul_ps(invLen, scaleV);
         // term / (1 + ratio), ratio = K term (s|m|⁻¹)³ / w: term·w / (w + K term s³), one division.
@@ -372,5 +396,29 @@ ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light, c
                                    bool specular) {
     return ReflectanceKernel(light, view, shininess, samples, specular)(s);
 }
+
+// The kernel's set-up and evaluation are compiled for AVX2 as well and chosen at load time where
+// the processor has it (as in ellipsoid.cpp): the same SSE2 intrinsics in VEX encoding, whose
+// three-operand instructions save the register copies and spills that 16 two-operand registers
+// force on the lattice's and the fibre's loops. Every lane rounds as in the SSE2 build, in the
+// same order ("avx2" enables no FMA instruction to contract into): both give the same bits.
+// `flatten` inlines the member functions each calls into the clone.
+#if defined(__x86_64__) && defined(__has_attribute)
+#if __has_attribute(target_clones) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#define VTEX_KERNEL_CLONES __attribute__((target_clones("avx2", "default"), flatten))
+#endif
+#endif
+#ifndef VTEX_KERNEL_CLONES
+#define VTEX_KERNEL_CLONES
+#endif
+VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUp(ReflectanceKernel& k, const Vector3d& wk, const Vector3d& wj,
+                                                         const Vector3d& wi) {
+    k.setUpProjection(wk, wj, wi);
+}
+VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUpLobe(ReflectanceKernel& k) { k.setUpLobe(); }
+VTEX_KERNEL_CLONES ReflectanceFactors ReflectanceKernel::Clones::evaluate(const ReflectanceKernel& k, const SggxMatrix& s) {
+    return k.evaluate(s);
+}
+#undef VTEX_KERNEL_CLONES
 
 }  // namespace vtex::primitive

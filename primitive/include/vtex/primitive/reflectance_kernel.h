@@ -61,12 +61,14 @@ public:
 
 private:
     struct Lattice;
+    struct Clones;  ///< set-up and evaluation compiled for SSE2 and AVX2 (reflectance_kernel.cpp)
+    ReflectanceFactors evaluate(const SggxMatrix& s) const;
+    void setUpProjection(const Eigen::Vector3d& wk, const Eigen::Vector3d& wj, const Eigen::Vector3d& wi);
     void setUpLobe();
     std::pair<double, double> latticeSums(const Eigen::Vector3d& mk, const Eigen::Vector3d& mj, const Eigen::Vector3d& mi,
                                           double scale, double lobeRatio, bool wantSpecular) const;
     double lobeSum(double mkx, double mjx, double mjy, const Eigen::Vector3d& Mi, double detC) const;
     double power(double c) const;                   ///< cⁿ: by squaring for a whole n ≤ 1024
-    void powers(std::array<float, 8>& c) const;  ///< the same on the fibre rule's 8 lanes, in place
     const Lattice* mLattice;
     /// S in the orthonormal basis (wk, wj, wi = view) as a linear map of S's six entries
     /// (xx, yy, zz, xy, xz, yz) to (kk, jj, ii, kj, ki, ji): row e holds the six outputs'
@@ -84,7 +86,7 @@ private:
     double mFibreGate = 0;  ///< the largest λ₁/λ₂ the fibre limit takes (src/fibre_specular.h)
     /// Strategy B's half vectors in (wk, wj, wi) and their (N·l) cosⁿα; 0 for those facing
     /// away from v, whose normal is then v.
-    alignas(16) std::array<double, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe
+    alignas(16) std::array<float, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe
     int mLobeCount = 0;  ///< how many face v
 };
 
