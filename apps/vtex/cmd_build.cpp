@@ -52,16 +52,14 @@ void checkEarlierTree(const octree::Octree& old, const octree::SparseVolume& vol
                                    std::to_string(old.info.tolerance) + ", not the options given now");
 }
 
-// The octree of the volume in `input`: with `--update`, the earlier tree's builder resumed and
-// only the region filtered again when the tree allows it (OctreeBuilder::resume), else a full
-// build; the same tree either way. `how` says which. A full build reads the file as it builds
-// (buildOctreeFromVtl), an update needs the whole volume first.
-octree::Octree buildOrUpdate(const std::string& input, const octree::BuildOptions& options,
+// The octree of `volume`: with `--update`, the earlier tree's builder resumed and only the region
+// filtered again when the tree allows it (OctreeBuilder::resume), else a full build; the same
+// tree either way. `how` says which.
+octree::Octree buildOrUpdate(octree::SparseVolume volume, const octree::BuildOptions& options,
                              const std::string& update, const std::string& regionText, Progress& progress,
                              std::string& how) {
     how = "full build";
-    if (update.empty()) return octree::buildOctreeFromVtl(input, options, progress);
-    octree::SparseVolume volume = octree::readVtl(input);
+    if (update.empty()) return octree::buildOctree(std::move(volume), options, progress);
     const octree::Octree old = octree::readVto(update);  // every section checked
     checkEarlierTree(old, volume, options, update);
     const octree::VoxelBox region = parseRegion("--region", regionText, std::uint32_t(1) << volume.info.levels);
@@ -141,13 +139,14 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         std::optional<ingest::TriangleMesh> source;
         if (!flags->source.empty()) source = ingest::loadMesh(flags->source);
         const auto start = std::chrono::steady_clock::now();
+        octree::SparseVolume volume = octree::readVtl(flags->input);
         octree::BuildOptions options;
         options.rule = *octree::parseFilterRule(flags->filter);
         options.tolerance = flags->tolerance;
         options.filterErrorSamples = flags->filterErrorSamples;
         TerminalProgress progress(global);
         std::string how;
-        const octree::Octree tree = buildOrUpdate(flags->input, options, flags->update, flags->region, progress, how);
+        const octree::Octree tree = buildOrUpdate(std::move(volume), options, flags->update, flags->region, progress, how);
         octree::writeVto(tree, flags->output);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         char line[1024];

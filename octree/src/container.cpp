@@ -21,17 +21,6 @@ namespace vtex::octree::detail {
 
 std::uint64_t checksum(std::string_view bytes) { return XXH3_64bits(bytes.data(), bytes.size()); }
 
-StreamingChecksum::StreamingChecksum() : mState(XXH3_createState()) {
-    if (!mState) throw std::bad_alloc();
-    reset();
-}
-StreamingChecksum::~StreamingChecksum() { XXH3_freeState(static_cast<XXH3_state_t*>(mState)); }
-void StreamingChecksum::reset() { XXH3_64bits_reset(static_cast<XXH3_state_t*>(mState)); }
-void StreamingChecksum::update(std::string_view piece) {
-    XXH3_64bits_update(static_cast<XXH3_state_t*>(mState), piece.data(), piece.size());
-}
-std::uint64_t StreamingChecksum::digest() const { return XXH3_64bits_digest(static_cast<const XXH3_state_t*>(mState)); }
-
 std::string sectionLocation(std::string_view tag) { return "section '" + std::string(tag) + "'"; }
 
 std::string printableTag(std::string_view raw) {
@@ -93,20 +82,22 @@ void writeContainerFile(const std::filesystem::path& file, std::string_view magi
     std::ostream& stream = out.stream();
     const std::string placeholder(kHeaderSize + kTableEntrySize * sections.size(), '\0');
     stream.write(placeholder.data(), std::streamsize(placeholder.size()));
-    StreamingChecksum sum;
+    // XXH3's streaming state gives the value XXH3_64bits gives the joined pieces.
+    const std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state(XXH3_createState(), &XXH3_freeState);
+    if (!state) throw std::bad_alloc();
     std::vector<TableEntry> entries;
     for (const auto& section : sections) {
-        sum.reset();
+        XXH3_64bits_reset(state.get());
         std::uint64_t written = 0;
         section.produce([&](std::string_view piece) {
-            sum.update(piece);
+            XXH3_64bits_update(state.get(), piece.data(), piece.size());
             stream.write(piece.data(), std::streamsize(piece.size()));
             written += piece.size();
         });
         if (written != section.size)
             throw std::logic_error("container section " + section.tag + ": " + std::to_string(written) +
                                    " bytes written, " + std::to_string(section.size) + " announced");
-        entries.push_back({section.tag, 0, section.size, sum.digest()});
+        entries.push_back({section.tag, 0, section.size, XXH3_64bits_digest(state.get())});
     }
     const std::string header = containerHeader(magic, version, entries);
     stream.seekp(0);

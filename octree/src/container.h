@@ -103,20 +103,6 @@ inline constexpr std::size_t kTableEntrySize = 32;
 inline constexpr std::uint32_t kMaxSections = 64;
 
 std::uint64_t checksum(std::string_view bytes);
-/// checksum() of bytes handed over in pieces, the pieces joined (XXH3's streaming state).
-class StreamingChecksum {
-public:
-    StreamingChecksum();
-    ~StreamingChecksum();
-    StreamingChecksum(const StreamingChecksum&) = delete;
-    StreamingChecksum& operator=(const StreamingChecksum&) = delete;
-    void reset();
-    void update(std::string_view piece);
-    std::uint64_t digest() const;
-
-private:
-    void* mState;  // XXH3_state_t, whose definition only container.cpp includes
-};
 /// The header's guard: the checksum of bytes 0–15 and of the section table, which ends at
 /// `tableEnd`.
 std::uint64_t tableChecksum(std::string_view bytes, std::size_t tableEnd);

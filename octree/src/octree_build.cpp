@@ -151,6 +151,7 @@ struct OctreeBuilder::Impl {
     }
 
     void buildAll(Progress& progress) {
+        levels.assign(L() + 1, {});
         std::vector<Level> sources(L() + 1);
         // Sized first: grown by doubling, the finest level (millions of nodes) was copied and its
         // fresh pages cleared about twice over.
@@ -173,14 +174,7 @@ struct OctreeBuilder::Impl {
         // per finest voxel), so the levels and the tree made next can reuse that memory instead
         // of faulting in fresh pages (vtex build keeps freed memory: keepFreedMemory).
         if (!keepFinest) std::vector<VolumeBlock>().swap(volume.blocks);
-        filterAll(std::move(sources), progress);
-    }
-
-    // Every level above the finest filtered from the one below, `sources[l]` (the volume's
-    // blocks at level l, sorted) merged in.
-    void filterAll(std::vector<Level> sources, Progress& progress) {
-        levels.assign(L() + 1, {});
-        const std::uint64_t total = sources[L()].size();
+        const std::uint64_t total = counts[L()];
         progress.start("filter", total + total / 7 + 1);
         levels[L()] = std::move(sources[L()]);
         for (std::uint32_t l = L(); l-- > 0;) {
@@ -399,19 +393,11 @@ struct OctreeBuilder::Impl {
 OctreeBuilder::OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress)
     : OctreeBuilder(std::move(finest), options, progress, true) {}
 
-namespace {
-
-void checkBuild(const VolumeInfo& info, const BuildOptions& options) {
-    if (info.levels > std::uint32_t(kMaxLevel)) throw std::invalid_argument("resolution too large");
-    if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
-        throw std::invalid_argument("tolerance must be finite and non-negative");
-}
-
-}  // namespace
-
 OctreeBuilder::OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress, bool keepFinest)
     : mImpl(std::make_unique<Impl>()) {
-    checkBuild(finest.info, options);
+    if (finest.info.levels > std::uint32_t(kMaxLevel)) throw std::invalid_argument("resolution too large");
+    if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
+        throw std::invalid_argument("tolerance must be finite and non-negative");
     mImpl->volume = std::move(finest);
     mImpl->volume.sortBlocks();
     mImpl->options = options;
@@ -427,7 +413,7 @@ std::optional<OctreeBuilder> OctreeBuilder::resume(const Octree& tree, const Vol
     if (tree.levelCount() != L + 1 || info.levels != L || info.solidDensity != 0 || tree.info.source.solidDensity != 0)
         return std::nullopt;
     OctreeBuilder builder;
-    OctreeBuilder::Impl& m = *builder.mImpl;
+    Impl& m = *builder.mImpl;
     m.options = options;
     m.volume.info = info;
     m.levels.assign(L + 1, {});
@@ -572,21 +558,6 @@ Octree OctreeBuilder::compress(Progress& progress) const {
 
 Octree buildOctree(SparseVolume volume, const BuildOptions& options, Progress& progress) {
     OctreeBuilder builder(std::move(volume), options, progress, false);
-    return builder.compress(progress);
-}
-
-Octree buildOctreeFromVtl(const std::filesystem::path& file, const BuildOptions& options, Progress& progress) {
-    std::optional<FinestLevel> finest = readFinestLevel(file);
-    if (!finest) return buildOctree(readVtl(file), options, progress);
-    checkBuild(finest->info, options);
-    OctreeBuilder builder;
-    OctreeBuilder::Impl& m = *builder.mImpl;
-    m.volume.info = finest->info;
-    m.options = options;
-    m.keepFinest = false;
-    std::vector<Level> sources(m.L() + 1);
-    sources[m.L()] = std::move(finest->nodes);
-    m.filterAll(std::move(sources), progress);
     return builder.compress(progress);
 }
 

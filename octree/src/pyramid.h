@@ -10,7 +10,6 @@
 #include <vtex/octree/volume.h>
 
 #include <cstdint>
-#include <filesystem>
 #include <limits>
 #include <memory>
 #include <new>
@@ -59,19 +58,6 @@ using Level = std::vector<PNode, UninitialisedAllocator<PNode>>;
 inline PNode sourceNode(const VolumeBlock& b) {
     return PNode{b.key, b.data, std::numeric_limits<float>::quiet_NaN(), kSource};
 }
-
-// A .vtl file of finest voxels, read for the builder: its header, and its voxels as the
-// pyramid's finest level (every node a source).
-struct FinestLevel {
-    VolumeInfo info;
-    Level nodes;
-};
-
-// `file` streamed into a FinestLevel when it holds finest voxels only (no solid interior) and
-// readVtl would accept it; std::nullopt for anything else, which its caller reads with readVtl
-// (whose error then names the problem). The same header and voxels as readVtl's, without the
-// whole file and a SparseVolume in memory first (buildOctreeFromVtl).
-std::optional<FinestLevel> readFinestLevel(const std::filesystem::path& file);
 
 // Whether the filter error of node `key` of `level` is measured, given that the level has
 // `count` filtered nodes: a hash-selected sample of about `samples` of them, independent of the

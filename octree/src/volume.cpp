@@ -1,5 +1,5 @@
 // The sampled finest level and the .vtl file format (docs/formats.md).
-#include "vtl_records.h"
+#include "container.h"
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/error.h>
@@ -18,6 +18,11 @@
 
 namespace vtex::octree {
 namespace {
+
+constexpr std::string_view kVtlMagic{"VTEX.VTL", 8};
+// A block record: its key, level and flags, then the voxel record (detail::kVoxelRecordSize).
+constexpr std::size_t kBlockHeaderSize = 8 + 1 + 1;
+constexpr std::size_t kBlockRecordSize = kBlockHeaderSize + detail::kVoxelRecordSize;
 
 bool allFinite(const VoxelData& d) {
     if (!std::isfinite(d.density)) return false;
@@ -42,10 +47,9 @@ T loadLittleEndian(const char* p) {
     return std::bit_cast<T>(bits);
 }
 
-}  // namespace
-
-namespace detail {
-
+// One kBlockRecordSize-byte record of the VOXL section (the layout serializeVtl writes): the
+// whole record is in bounds, so no field needs ByteReader's checks. decodeBlockHeader: its key,
+// level and flags alone (the voxel left empty).
 VolumeBlock decodeBlockHeader(const char* record) {
     VolumeBlock b;
     b.key = loadLittleEndian<std::uint64_t>(record);
@@ -53,28 +57,15 @@ VolumeBlock decodeBlockHeader(const char* record) {
     b.flags = std::uint8_t(record[9]);
     return b;
 }
-
 VolumeBlock decodeBlock(const char* record) {
     VolumeBlock b = decodeBlockHeader(record);
-    b.data = loadVoxelData(record + kBlockHeaderSize);
+    b.data = detail::loadVoxelData(record + kBlockHeaderSize);
     return b;
 }
 
-std::string_view blockProblem(const VolumeBlock& b, const char* previousRecord, std::uint32_t L) {
-    if (b.level > L) return "level deeper than the resolution";
-    if (b.flags > kBlockSolid) return "unknown block flags";
-    if (b.level < L && !b.isSolid()) return "coarse block that is not solid";
-    if (b.key >= (std::uint64_t(1) << (3 * b.level))) return "key out of range";
-    if (auto problem = checkVoxelData(b.data, false); !problem.empty()) return problem;
-    if (previousRecord) {
-        // A level beyond L is the previous block's own problem, reported first.
-        const VolumeBlock p = decodeBlockHeader(previousRecord);
-        const auto finestKey = [L](const VolumeBlock& x) { return x.key << (3 * (L - x.level)); };
-        if (p.level <= L && finestKey(b) < finestKey(p) + (std::uint64_t(1) << (3 * (L - p.level))))
-            return "blocks out of order or overlapping";
-    }
-    return {};
-}
+}  // namespace
+
+namespace detail {
 
 void writeVoxelData(ByteWriter& w, const VoxelData& d) {
     char record[kVoxelRecordSize];
@@ -217,10 +208,22 @@ SparseVolume parseVtl(std::string_view bytes, const std::filesystem::path& file)
         throw InputError(file, "size does not match its block count " + std::to_string(count), where);
     const std::uint32_t L = volume.info.levels;
     const char* records = payload.data() + 8;
-    // A block's problem, or empty. The previous block is read from its record, which every
-    // thread can see, decoded or not.
-    const auto problemAt = [&](std::uint64_t i) {
-        return blockProblem(volume.blocks[i], i > 0 ? records + kBlockRecordSize * (i - 1) : nullptr, L);
+    // A block's problem, or empty; blocks i − 1 and i must not overlap (keys strictly in order).
+    // The previous block is read from its record, which every thread can see, decoded or not.
+    const auto problemAt = [&](std::uint64_t i) -> std::string_view {
+        const VolumeBlock& b = volume.blocks[i];
+        if (b.level > L) return "level deeper than the resolution";
+        if (b.flags > kBlockSolid) return "unknown block flags";
+        if (b.level < L && !b.isSolid()) return "coarse block that is not solid";
+        if (b.key >= (std::uint64_t(1) << (3 * b.level))) return "key out of range";
+        if (auto problem = checkVoxelData(b.data, false); !problem.empty()) return problem;
+        if (i > 0) {
+            // A level beyond L is the previous block's own problem, reported first.
+            const VolumeBlock p = decodeBlockHeader(records + kBlockRecordSize * (i - 1));
+            if (p.level <= L && volume.finestKey(b) < volume.finestKey(p) + (std::uint64_t(1) << (3 * (L - p.level))))
+                return "blocks out of order or overlapping";
+        }
+        return {};
     };
     // Decoded and checked in one pass on all threads: the decode into reserved storage ran on
     // one core before the check (a 512³ bush holds 10⁶ blocks), and the check read every block

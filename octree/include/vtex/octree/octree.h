@@ -161,7 +161,6 @@ private:
     // is then empty), for buildOctree, whose builder nobody sees or updates.
     OctreeBuilder(SparseVolume finest, const BuildOptions& options, Progress& progress, bool keepFinest);
     friend Octree buildOctree(SparseVolume volume, const BuildOptions& options, Progress& progress);
-    friend Octree buildOctreeFromVtl(const std::filesystem::path& file, const BuildOptions& options, Progress& progress);
     struct Impl;
     std::unique_ptr<Impl> mImpl;
 };
@@ -169,12 +168,6 @@ private:
 /// OctreeBuilder(volume).compress() in one call. Pass the volume by std::move when it is not
 /// needed afterwards: the builder keeps it, and a copy of a 1024³ volume is half a gigabyte.
 Octree buildOctree(SparseVolume volume, const BuildOptions& options, Progress& progress);
-
-/// buildOctree(readVtl(file), options, progress): the same tree, and the same errors. A file of
-/// finest voxels (no solid interior) is read a piece at a time straight into the builder, the
-/// pieces checksummed and decoded while the next is read, instead of whole into memory and then
-/// into a SparseVolume (`vtex build`).
-Octree buildOctreeFromVtl(const std::filesystem::path& file, const BuildOptions& options, Progress& progress);
 
 /// An upper estimate of the peak memory (bytes) of reading the .vtl `file` and building its
 /// octree, from the file's size alone, before it is read: 12× the file plus 32 MiB (the parsed
