@@ -107,7 +107,7 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
         }
     }
     geometry.faces = prims.size();
-    prims.keepBuilt(std::size_t(32) << 20);  // ~70 000 faces; larger meshes rebuild on demand
+    prims.keepBuilt(std::size_t(32) << 20);  // ~60 000 faces; larger meshes rebuild on demand
     geometry.tracer = std::make_unique<Tracer>(std::move(prims));
     return geometry;
 }

@@ -160,6 +160,11 @@ TrilinearCell::TrilinearCell(const std::array<Vec3, 4>& positions, const std::ar
         mCorners[i] = positions[i] + w0 * height * normals[i];
         mCorners[i + 4] = positions[i] + (w0 + 1) * height * normals[i];
     }
+    const auto& c = mCorners;
+    mAffine = affineMap(c, mJ);
+    const Vec3 du = c[1] - c[0], dv = c[2] - c[0], dw = c[4] - c[0];
+    mConstantJacobian = mAffine && du == c[3] - c[2] && du == c[5] - c[4] && du == c[7] - c[6] && dv == c[3] - c[1] &&
+                        dv == c[6] - c[4] && dv == c[7] - c[5] && dw == c[5] - c[1] && dw == c[6] - c[2] && dw == c[7] - c[3];
 }
 
 Vec3 TrilinearCell::faceTwist(int face) const { return twistOf(mCorners, face); }
@@ -186,6 +191,8 @@ Vec3 TrilinearCell::map(const Vec3& r) const {
 }
 
 Mat3 TrilinearCell::jacobian(const Vec3& r) const {
+    // Each lerp below between equal differences returns the difference itself (a + s·0 = a).
+    if (mConstantJacobian && r.allFinite()) return mJ;
     const double u = r.x(), v = r.y(), w = r.z();
     const auto& c = mCorners;
     const auto lerp = [](const Vec3& a, const Vec3& b, double s) { return Vec3(a + s * (b - a)); };
@@ -227,8 +234,8 @@ std::optional<Vec3> TrilinearCell::inverse(const Vec3& x, const Vec3& guess, dou
     // inverted by one linear solve, exact up to rounding. Its residual is held to the same
     // tolerance, first against the diagonal |X(1,1,1) − X(0,0,0)| ≤ size() (a cheaper bound, so
     // that passing it passes the test with size()); a near-singular cell falls through to Newton.
-    if (Mat3 j; affineMap(mCorners, j)) {
-        const Vec3 r = j.inverse() * (x - mCorners[0]);
+    if (mAffine) {
+        const Vec3 r = mJ.inverse() * (x - mCorners[0]);
         if (r.allFinite()) {
             const double err = (map(r) - x).norm();
             if (accept(r, err, tolerance * (mCorners[7] - mCorners[0]).norm()) ||
@@ -423,7 +430,7 @@ int generalSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::a
 }  // namespace
 
 int cellSpans(const TrilinearCell& cell, const Vec3& o, const Vec3& d, std::array<CellSpan, 4>& spans) {
-    if (Mat3 j; affineMap(cell.corners(), j)) return affineSpans(cell.corners()[0], j, o, d, spans);
+    if (cell.affine()) return affineSpans(cell.corners()[0], cell.affineJacobian(), o, d, spans);
     return generalSpans(cell, o, d, spans);
 }
 

@@ -1,6 +1,6 @@
 // The scene's primitives, one per base face, stored as what they are made from (a face of a base
 // mesh and the surface placing it), and put together on demand: a face's corners, normals,
-// trilinear cell and cell map take ~500 bytes in double precision, which a million faces cannot
+// trilinear cell and cell map take ~560 bytes in double precision, which a million faces cannot
 // afford (issue 18: a 10⁶-face base mesh within 300 MB), while rebuilding them costs a few hundred
 // instructions, next to the six patch tests of a ray entering a cell. Tables that fit a small
 // budget keep them built instead (keepBuilt).

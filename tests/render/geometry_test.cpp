@@ -358,6 +358,49 @@ TEST(Cell, AffineCellsTakeTheSlabTestWithTheSameSpans) {
     EXPECT_GT(hits, 1500);
 }
 
+// The Jacobian, which a parallelepiped keeps from its construction instead of interpolating its
+// edges at every point, against the derivative of the trilinear map written out here: the
+// bilinear blend of the four edges along each axis. The parallelepipeds are recognised as affine
+// and the perturbed cells not; a point that is not finite gets no finite Jacobian.
+TEST(Cell, JacobianIsTheBlendOfTheEdgesOnAffineAndTrilinearCells) {
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<double> around(-0.2, 1.2);
+    const auto blend = [](const TrilinearCell& cell, const Vec3& r) {
+        const auto& c = cell.corners();
+        const double u = r.x(), v = r.y(), w = r.z();
+        const auto edges = [](const Vec3& e0, const Vec3& e1, const Vec3& e2, const Vec3& e3, double a, double b) {
+            return Vec3((1 - a) * (1 - b) * e0 + a * (1 - b) * e1 + (1 - a) * b * e2 + a * b * e3);
+        };
+        Mat3 j;
+        j.col(0) = edges(c[1] - c[0], c[3] - c[2], c[5] - c[4], c[7] - c[6], v, w);
+        j.col(1) = edges(c[2] - c[0], c[3] - c[1], c[6] - c[4], c[7] - c[5], u, w);
+        j.col(2) = edges(c[4] - c[0], c[5] - c[1], c[6] - c[2], c[7] - c[3], u, v);
+        return j;
+    };
+    for (int k = 0; k < 500; ++k) {
+        const AffinePair pair = randomParallelepiped(rng, k);
+        ASSERT_TRUE(pair.exactlyAffine()) << k;
+        EXPECT_TRUE(pair.affine.affine()) << k;
+        EXPECT_FALSE(pair.trilinear.affine()) << k;
+        const auto& c = pair.affine.corners();
+        EXPECT_EQ(pair.affine.affineJacobian().col(0), c[1] - c[0]) << k;
+        EXPECT_EQ(pair.affine.affineJacobian().col(1), c[2] - c[0]) << k;
+        EXPECT_EQ(pair.affine.affineJacobian().col(2), c[4] - c[0]) << k;
+        for (const TrilinearCell* cell : {&pair.affine, &pair.trilinear}) {
+            const Vec3 r(around(rng), around(rng), around(rng));
+            const Mat3 expected = blend(*cell, r);
+            EXPECT_LT((cell->jacobian(r) - expected).norm(), 1e-12 * expected.norm()) << k;
+        }
+        EXPECT_FALSE(pair.affine.jacobian(Vec3(NAN, 0.5, 0.5)).allFinite()) << k;
+    }
+    for (int k = 0; k < 200; ++k) {  // jittered, tilted and twisted cells: trilinear
+        const TrilinearCell cell = randomCell(rng, 0.2, 0.3, 0.5, k % 2 ? 0.8 : 0.0);
+        EXPECT_FALSE(cell.affine()) << k;
+        const Vec3 r(around(rng), around(rng), around(rng));
+        EXPECT_LT((cell.jacobian(r) - blend(cell, r)).norm(), 1e-12 * blend(cell, r).norm()) << k;
+    }
+}
+
 // An affine cell's inverse map is one linear solve instead of Newton's iterations; it must find
 // what Newton finds on the perturbed (trilinear) cell, and refuse what Newton refuses: points
 // inside, on the faces and outside random parallelepipeds.

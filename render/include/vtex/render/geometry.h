@@ -87,8 +87,18 @@ public:
     std::optional<Vec3> inverse(const Vec3& x, const Vec3& guess = Vec3(0.5, 0.5, 0.5),
                                 double tolerance = 1e-7, double slack = 1e-3) const;
 
+    /// Whether the map is affine (every mixed term exactly zero: a parallelepiped, as a flat
+    /// face under a shell along its constant normal makes), and then its Jacobian.
+    bool affine() const { return mAffine; }
+    const Mat3& affineJacobian() const { return mJ; }
+
 private:
     std::array<Vec3, 8> mCorners;
+    // Decided once by the constructor (jacobian and the ray test ask for every ray and sample):
+    // the affine test, and whether every difference jacobian() interpolates equals its edge's,
+    // so that jacobian(r) is mJ bit for bit at every finite r.
+    bool mAffine = true, mConstantJacobian = true;
+    Mat3 mJ = Mat3::Zero();
 };
 
 /// An interval [tIn, tOut] of a ray inside a cell, with where it enters and leaves.
