@@ -86,7 +86,21 @@ const std::array<double, 65> kCosCutoffs = [] {
 
 }  // namespace
 
-// Set-up and evaluation in SSE2 and AVX2 builds (Clones, at the end of this file).
+// The kernel's set-up and evaluation are compiled for AVX2 as well and chosen at load time where
+// the processor has it (as in ellipsoid.cpp): the same SSE2 intrinsics in VEX encoding, whose
+// three-operand instructions save the register copies and spills that 16 two-operand registers
+// force on the lattice's and the fibre's loops. Every lane rounds as in the SSE2 build, in the
+// same order ("avx2" enables no FMA instruction to contract into): both give the same bits.
+// `flatten` inlines the member functions each calls into the clone. GCC only: Clang 14 (the fuzz
+// build's compiler) cannot combine target_clones with flatten, and builds the SSE2 code alone.
+#if defined(__x86_64__) && defined(__has_attribute) && !defined(__clang__)
+#if __has_attribute(target_clones) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#define VTEX_KERNEL_CLONES __attribute__((target_clones("avx2", "default"), flatten))
+#endif
+#endif
+#ifndef VTEX_KERNEL_CLONES
+#define VTEX_KERNEL_CLONES
+#endif
 struct ReflectanceKernel::Clones {
     static void setUp(ReflectanceKernel& k, const Vector3d& wk, const Vector3d& wj, const Vector3d& wi);
     static void setUpLobe(ReflectanceKernel& k);
@@ -397,20 +411,6 @@ ReflectanceFactors reflectanceFast(const SggxMatrix& s, const Vector3d& light, c
     return ReflectanceKernel(light, view, shininess, samples, specular)(s);
 }
 
-// The kernel's set-up and evaluation are compiled for AVX2 as well and chosen at load time where
-// the processor has it (as in ellipsoid.cpp): the same SSE2 intrinsics in VEX encoding, whose
-// three-operand instructions save the register copies and spills that 16 two-operand registers
-// force on the lattice's and the fibre's loops. Every lane rounds as in the SSE2 build, in the
-// same order ("avx2" enables no FMA instruction to contract into): both give the same bits.
-// `flatten` inlines the member functions each calls into the clone.
-#if defined(__x86_64__) && defined(__has_attribute)
-#if __has_attribute(target_clones) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-#define VTEX_KERNEL_CLONES __attribute__((target_clones("avx2", "default"), flatten))
-#endif
-#endif
-#ifndef VTEX_KERNEL_CLONES
-#define VTEX_KERNEL_CLONES
-#endif
 VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUp(ReflectanceKernel& k, const Vector3d& wk, const Vector3d& wj,
                                                          const Vector3d& wi) {
     k.setUpProjection(wk, wj, wi);
