@@ -83,7 +83,6 @@ const std::array<double, 65> kCosCutoffs = [] {
     return c;
 }();
 
-
 }  // namespace
 
 // The kernel's set-up and evaluation are compiled for AVX2 as well and chosen at load time where

@@ -170,8 +170,8 @@ TrilinearCell::TrilinearCell(const std::array<Vec3, 4>& positions, const std::ar
 Vec3 TrilinearCell::faceTwist(int face) const { return twistOf(mCorners, face); }
 
 double TrilinearCell::size() const {
-    // Computed when asked, not kept: cells are rebuilt for every ray that meets them
-    // (prim_table.h), and most of those never ask. The largest squared distance, then one root
+    // Computed when asked, not kept: a large mesh's cells are rebuilt for every ray that meets
+    // them (prim_table.h), and most of those never ask. The largest squared distance, then one root
     // (the same as the largest root: it is monotonic and correctly rounded).
     double size2 = 0;
     for (int i = 0; i < 8; ++i)

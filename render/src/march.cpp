@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -69,7 +69,7 @@ void fillIndex(const octree::Octree& tree, const octree::OctreeNode& node, int l
 // with g ≤ v, grown by v on both sides, reach; so each threshold v is one 64-bit mask, grown in
 // log2(v) steps (a set grown by a, joined with itself shifted by ±s, s ≤ a + 1, is grown by
 // a + s, without leaving the line between a voxel and what it reaches), and each voxel takes the
-// first threshold that reaches it. About a thirtieth of the outward search per voxel it replaces.
+// first threshold that reaches it.
 void chebyshevLine(const std::uint8_t* g, std::uint8_t* f, int n, bool wrap) {
     constexpr int kFar = LevelGrid::kCap;
     const std::uint64_t full = n == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << n) - 1;

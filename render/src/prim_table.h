@@ -46,15 +46,22 @@ public:
 
     /// Adds a surface placing: they are numbered in the order added (as SceneGeometry::surfaces),
     /// which add() takes.
-    void addSurface(Surface surface) { mSurfaces.push_back(std::move(surface)); }
+    void addSurface(Surface surface) {
+        mSurfaces.push_back(std::move(surface));
+        mBuilt.clear();
+    }
     /// Adds face `face` of surface `surface`'s mesh (its corners checked by the caller).
-    void add(int surface, std::uint32_t face) { mFaces.push_back({std::uint32_t(surface), face}); }
+    void add(int surface, std::uint32_t face) {
+        mFaces.push_back({std::uint32_t(surface), face});
+        mBuilt.clear();
+    }
 
     /// Puts every primitive together once and keeps it, if the whole table takes at most
-    /// `maxBytes`: a bush field's 400 faces take 0.3 MB, and rebuilding a primitive (its cell's
-    /// corners, normals and map) for every ray that meets it was 4 % of its render. A mesh too
-    /// large for that (issue 18's million faces) keeps being put together on demand. Call once
-    /// the faces are added; operator[], cell() and map() then return copies of what is kept.
+    /// `maxBytes`: a bush field's 400 faces take 0.2 MB, and not rebuilding a primitive (its
+    /// cell's corners, normals and map) for every ray that meets it saves ~3 % of its render's
+    /// instructions (docs/render.md, "Geometry"). A mesh too large for that (issue 18's million
+    /// faces) keeps being put together on demand. operator[], cell(), patch() and map() then
+    /// return copies of what is kept; adding a face or a surface drops it.
     void keepBuilt(std::size_t maxBytes);
 
     std::size_t size() const { return mFaces.size(); }

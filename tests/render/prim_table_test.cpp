@@ -113,6 +113,14 @@ TEST(PrimTable, KeptPrimitivesAreThoseBuiltOnDemand) {
             EXPECT_EQ(a.map.a, b.map.a);
             EXPECT_EQ(a.map.b, b.map.b);
         }
+        // A face added after keepBuilt is not missing from what is kept: the table drops it.
+        detail::PrimTable grown = kept;
+        grown.add(0, 0);
+        ASSERT_EQ(grown.size(), kept.size() + 1);
+        const detail::Prim added = grown[kept.size()];
+        EXPECT_EQ(added.index, int(kept.size()));
+        EXPECT_EQ(added.face, 0);
+        for (std::size_t c = 0; c < 8; ++c) EXPECT_EQ(grown.cell(kept.size()).corners()[c], kept.cell(0).corners()[c]);
     }
 }
 
