@@ -76,15 +76,16 @@ void intersectFunction(const RTCIntersectFunctionNArguments* args) {
         if (SpanCache* cache = ctx->cache) {
             for (int i = 0; i < cache->used; ++i)
                 if (cache->prim[std::size_t(i)] == int(args->primID)) {
-                    spansPtr = &cache->spans[std::size_t(i)];
+                    spansPtr = &cache->read(std::size_t(i));
                     count = cache->count[std::size_t(i)];
                     break;
                 }
             if (!spansPtr) {
                 const std::size_t slot = std::size_t(cache->next);
-                cache->count[slot] = count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, cache->spans[slot]);
+                SpanCache::Spans& spans = cache->write(slot);
+                cache->count[slot] = count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, spans);
                 cache->prim[slot] = int(args->primID);
-                spansPtr = &cache->spans[slot];
+                spansPtr = &spans;
                 cache->next = (cache->next + 1) % SpanCache::kSize;
                 cache->used = std::min(cache->used + 1, SpanCache::kSize);
             }

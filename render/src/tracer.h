@@ -8,6 +8,7 @@
 
 #include <array>
 #include <limits>
+#include <new>
 #include <optional>
 #include <vector>
 
@@ -23,13 +24,26 @@ struct Hit {
 /// The spans of the cells a ray has met, kept across the trace() calls of one ray (same origin
 /// and direction, growing tNear): Embree offers the cells behind tNear again, and their six
 /// patch tests would be repeated for nothing. A small ring buffer; one per ray, never shared.
+/// Its slots are left uninitialised until a cell's spans are written into one (slot()):
+/// default-initialising their 64 CellSpans was ~700 instructions for every camera and shadow
+/// ray, a seventh of the bush field's far view, most of whose rays meet one cell or none.
 struct SpanCache {
     static constexpr int kSize = 16;
+    using Spans = std::array<CellSpan, 4>;
+    union Slot {
+        Slot() {}  // no CellSpan constructed: see write()
+        Spans spans;
+    };
     std::array<int, kSize> prim;
     std::array<int, kSize> count;
-    std::array<std::array<CellSpan, 4>, kSize> spans;
+    std::array<Slot, kSize> slots;
     int used = 0;
     int next = 0;
+
+    /// Slot i's spans, begun afresh (the only way a slot's spans come to life).
+    Spans& write(std::size_t i) { return *::new (&slots[i].spans) Spans; }
+    /// Slot i's spans, written by write(i) for the ray's prim[i] (i < used).
+    const Spans& read(std::size_t i) const { return slots[i].spans; }
 };
 
 class Tracer {
