@@ -133,6 +133,19 @@ Tracer::Tracer(PrimTable prims) : mPrims(std::move(prims)) {
     RTCScene scene = rtcNewScene(device);
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+    for (std::size_t i = 0; i < mPrims.size(); ++i) {
+        const auto include = [&](const auto& corners) {
+            for (const Vec3& c : corners) {
+                mLo = mLo.cwiseMin(c);
+                mHi = mHi.cwiseMax(c);
+            }
+        };
+        if (mPrims.textured(i))
+            include(mPrims.cell(i).corners());
+        else
+            include(mPrims.patch(i));
+    }
+    if (!mPrims.empty()) mHair = 1e-9 * (mLo.cwiseAbs().cwiseMax(mHi.cwiseAbs()).maxCoeff() + (mHi - mLo).maxCoeff());
     if (!mPrims.empty()) {
         RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(geometry, unsigned(mPrims.size()));
@@ -158,9 +171,29 @@ Tracer::~Tracer() {
     rtcReleaseDevice(static_cast<RTCDevice>(mDevice));
 }
 
+// The slab test of the ray against the bounds, in double precision. A shadow ray toward a light
+// above the scene, from the top of a texel's shell (a lattice node's that leaves its cell
+// through the top), is inside the bounds for a rounding error only; Embree would still descend
+// to the cells around its origin and test them (5 % of the bush field's far view).
+bool Tracer::mayHit(const Vec3& o, const Vec3& d, double tNear, double tFar) const {
+    double t0 = tNear, t1 = tFar;
+    for (int k = 0; k < 3; ++k) {
+        if (d[k] == 0) {
+            if (o[k] < mLo[k] || o[k] > mHi[k]) return false;
+            continue;
+        }
+        const double inv = 1 / d[k];
+        double a = (mLo[k] - o[k]) * inv, b = (mHi[k] - o[k]) * inv;
+        if (a > b) std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+    }
+    return t1 >= t0 && t1 > tNear + mHair / d.norm();
+}
+
 std::optional<Hit> Tracer::trace(const Vec3& o, const Vec3& d, double tNear, double tFar, SpanCache* cache) const {
     if (!embreeCanTrace(o, d)) return std::nullopt;  // Embree would assert (embree_ray.h)
-    if (mPrims.empty()) return std::nullopt;
+    if (mPrims.empty() || !mayHit(o, d, tNear, tFar)) return std::nullopt;
     TraceContext ctx;
     rtcInitIntersectContext(&ctx.context);
     ctx.prims = &mPrims;

@@ -62,7 +62,15 @@ public:
     const PrimTable& prims() const { return mPrims; }
 
 private:
+    /// Whether o + t·d can meet the primitives' bounds for some t in (tNear + a hair, tFar].
+    bool mayHit(const Vec3& o, const Vec3& d, double tNear, double tFar) const;
+
     PrimTable mPrims;
+    /// The exact (double) bounds of every primitive (a patch and a cell lie in the convex hull of
+    /// their corners), and 1e-9 of their size: a ray that is inside them for less than that past
+    /// tNear meets nothing Embree would report (mayHit).
+    Vec3 mLo = Vec3::Constant(INFINITY), mHi = Vec3::Constant(-INFINITY);
+    double mHair = 0;
     void* mDevice = nullptr;
     void* mScene = nullptr;
 };
