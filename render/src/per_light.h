@@ -11,7 +11,8 @@ namespace vtex::render::detail {
 // benchmarks), on the heap beyond, so that every light lights every voxel. Only the lights there
 // are get constructed: a span's state is made per camera-ray span, and constructing all sixteen
 // (a track is 520 bytes, a light's reflectance kernel more) was 4 % of the bush field's middle
-// view.
+// view. They are default-initialised: their members' own initialisers apply, arrays without
+// one (a track's 2 × 32 recorded queries, read only below its count) are left as they are.
 template <class T>
 class PerLight {
 public:
@@ -21,7 +22,7 @@ public:
             mData = mLarge.data();
         } else {
             mData = reinterpret_cast<T*>(mSmall);
-            for (std::size_t i = 0; i < n; ++i) new (mData + i) T{};
+            for (std::size_t i = 0; i < n; ++i) new (mData + i) T;
         }
     }
     ~PerLight() {
