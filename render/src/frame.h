@@ -248,7 +248,8 @@ double walkShadowRay(const Tracer& tracer, const std::vector<SurfaceRuntime>& su
     for (int step = 0; step < 4096; ++step) {
         const auto hit = tracer.trace(o, l, tNear, tMax, &cache);
         if (!hit) break;
-        const Prim& prim = tracer.prims()[std::size_t(hit->prim)];
+        std::optional<Prim> scratch;
+        const Prim& prim = tracer.prims().at(std::size_t(hit->prim), scratch);
         if (!prim.textured) return 0;
         const CellSpan& span = hit->span;
         if (span.faceIn == 0 && hit->t <= span.tIn) return 0;

@@ -76,7 +76,8 @@ private:
         for (int step = 0; step < 4096; ++step) {
             const auto hit = mTracer.trace(o, d, tNear, std::numeric_limits<double>::infinity(), &cache);
             if (!hit) break;
-            const Prim& prim = mTracer.prims()[std::size_t(hit->prim)];
+            std::optional<Prim> scratch;
+            const Prim& prim = mTracer.prims().at(std::size_t(hit->prim), scratch);
             const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
             if (!prim.textured) return opaque(hit->t, shadePlain(prim, surface, hit->u, hit->v, d, counters));
             const CellSpan& span = hit->span;

@@ -117,7 +117,8 @@ public:
         for (int bounce = 0; bounce < 4096 && state.transmittance > kTransmittanceCutoff; ++bounce) {
             const auto hit = mTracer.trace(o, d, tNear, std::numeric_limits<double>::infinity(), &cache);
             if (!hit) break;
-            const Prim& prim = mTracer.prims()[std::size_t(hit->prim)];
+            std::optional<Prim> scratch;
+            const Prim& prim = mTracer.prims().at(std::size_t(hit->prim), scratch);
             const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
             if (!prim.textured) {
                 const Vec3 x = bilerp(prim.p, hit->u, hit->v);
