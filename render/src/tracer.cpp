@@ -70,7 +70,7 @@ void intersectFunction(const RTCIntersectFunctionNArguments* args) {
         hit.u = h->u;
         hit.v = h->v;
     } else {
-        std::array<CellSpan, 4> local;
+        SpanCache::Slot local;  // written only when the ray has no cache
         const std::array<CellSpan, 4>* spansPtr = nullptr;
         int count = 0;
         if (SpanCache* cache = ctx->cache) {
@@ -90,8 +90,9 @@ void intersectFunction(const RTCIntersectFunctionNArguments* args) {
                 cache->used = std::min(cache->used + 1, SpanCache::kSize);
             }
         } else {
-            count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, local);
-            spansPtr = &local;
+            SpanCache::Spans& spans = *::new (&local.spans) SpanCache::Spans;
+            count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, spans);
+            spansPtr = &spans;
         }
         const std::array<CellSpan, 4>& spans = *spansPtr;
         int chosen = -1;
