@@ -138,10 +138,11 @@ public:
     }
 
     [[gnu::noinline]] double cachedShadowBuildingPrim(int slot, int primIndex, const Vec3& r, const Vec3& l, int depth) const {
-        std::optional<Prim> built;
+        std::optional<Prim> scratch;
+        const Prim* prim = nullptr;
         return mLightCache.lookup(slot, primIndex, r, [&](const Vec3& node) {
-            if (!built) built.emplace(mTracer.prims()[std::size_t(primIndex)]);
-            return nodeAt(slot, *built, node, l, depth);
+            if (!prim) prim = &mTracer.prims().at(std::size_t(primIndex), scratch);
+            return nodeAt(slot, *prim, node, l, depth);
         });
     }
 

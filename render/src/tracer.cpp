@@ -29,21 +29,25 @@ struct TraceContext {
     SpanCache* cache;
 };
 
-void boundsFunction(const RTCBoundsFunctionArguments* args) {
-    const auto& prims = *static_cast<const PrimTable*>(args->geometryUserPtr);
-    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+// Grows [lo, hi] by the exact (double) bounds of primitive i: a bilinear patch lies in the convex
+// hull of its corners, a trilinear cell in that of its eight corners.
+void includeBounds(const PrimTable& prims, std::size_t i, Vec3& lo, Vec3& hi) {
     const auto include = [&](const auto& corners) {
         for (const Vec3& c : corners) {
             lo = lo.cwiseMin(c);
             hi = hi.cwiseMax(c);
         }
     };
-    // A bilinear patch lies in the convex hull of its corners, a trilinear cell in that of its
-    // eight corners.
-    if (prims.textured(args->primID))
-        include(prims.cell(args->primID).corners());
+    if (prims.textured(i))
+        include(prims.cell(i).corners());
     else
-        include(prims.patch(args->primID));
+        include(prims.patch(i));
+}
+
+void boundsFunction(const RTCBoundsFunctionArguments* args) {
+    const auto& prims = *static_cast<const PrimTable*>(args->geometryUserPtr);
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    includeBounds(prims, args->primID, lo, hi);
     // Pad for the float rounding of the box and of the ray Embree traverses with.
     const double pad = 1e-6 * (lo.cwiseAbs().maxCoeff() + hi.cwiseAbs().maxCoeff() + (hi - lo).maxCoeff()) + 1e-30;
     RTCBounds* b = args->bounds_o;
@@ -70,29 +74,24 @@ void intersectFunction(const RTCIntersectFunctionNArguments* args) {
         hit.u = h->u;
         hit.v = h->v;
     } else {
-        SpanCache::Slot local;  // written only when the ray has no cache
+        SpanCache local;  // a ray traced without a cache: one for this test alone
+        SpanCache* cache = ctx->cache ? ctx->cache : &local;
         const std::array<CellSpan, 4>* spansPtr = nullptr;
         int count = 0;
-        if (SpanCache* cache = ctx->cache) {
-            for (int i = 0; i < cache->used; ++i)
-                if (cache->prim[std::size_t(i)] == int(args->primID)) {
-                    spansPtr = &cache->read(std::size_t(i));
-                    count = cache->count[std::size_t(i)];
-                    break;
-                }
-            if (!spansPtr) {
-                const std::size_t slot = std::size_t(cache->next);
-                SpanCache::Spans& spans = cache->write(slot);
-                cache->count[slot] = count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, spans);
-                cache->prim[slot] = int(args->primID);
-                spansPtr = &spans;
-                cache->next = (cache->next + 1) % SpanCache::kSize;
-                cache->used = std::min(cache->used + 1, SpanCache::kSize);
+        for (int i = 0; i < cache->used; ++i)
+            if (cache->prim[std::size_t(i)] == int(args->primID)) {
+                spansPtr = &cache->read(std::size_t(i));
+                count = cache->count[std::size_t(i)];
+                break;
             }
-        } else {
-            SpanCache::Spans& spans = *::new (&local.spans) SpanCache::Spans;
-            count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, spans);
+        if (!spansPtr) {
+            const std::size_t slot = std::size_t(cache->next);
+            SpanCache::Spans& spans = cache->write(slot);
+            cache->count[slot] = count = cellSpans(prims.cell(args->primID), ctx->o, ctx->d, spans);
+            cache->prim[slot] = int(args->primID);
             spansPtr = &spans;
+            cache->next = (cache->next + 1) % SpanCache::kSize;
+            cache->used = std::min(cache->used + 1, SpanCache::kSize);
         }
         const std::array<CellSpan, 4>& spans = *spansPtr;
         int chosen = -1;
@@ -134,20 +133,9 @@ Tracer::Tracer(PrimTable prims) : mPrims(std::move(prims)) {
     RTCScene scene = rtcNewScene(device);
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-    for (std::size_t i = 0; i < mPrims.size(); ++i) {
-        const auto include = [&](const auto& corners) {
-            for (const Vec3& c : corners) {
-                mLo = mLo.cwiseMin(c);
-                mHi = mHi.cwiseMax(c);
-            }
-        };
-        if (mPrims.textured(i))
-            include(mPrims.cell(i).corners());
-        else
-            include(mPrims.patch(i));
-    }
-    if (!mPrims.empty()) mHair = 1e-9 * (mLo.cwiseAbs().cwiseMax(mHi.cwiseAbs()).maxCoeff() + (mHi - mLo).maxCoeff());
     if (!mPrims.empty()) {
+        for (std::size_t i = 0; i < mPrims.size(); ++i) includeBounds(mPrims, i, mLo, mHi);
+        mHair = 1e-9 * (mLo.cwiseAbs().cwiseMax(mHi.cwiseAbs()).maxCoeff() + (mHi - mLo).maxCoeff());
         RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(geometry, unsigned(mPrims.size()));
         rtcSetGeometryUserData(geometry, &mPrims);
@@ -175,7 +163,7 @@ Tracer::~Tracer() {
 // The slab test of the ray against the bounds, in double precision. A shadow ray toward a light
 // above the scene, from the top of a texel's shell (a lattice node's that leaves its cell
 // through the top), is inside the bounds for a rounding error only; Embree would still descend
-// to the cells around its origin and test them (5 % of the bush field's far view).
+// to the cells around its origin and test them (7 % of the bush field's far view).
 bool Tracer::mayHit(const Vec3& o, const Vec3& d, double tNear, double tFar) const {
     double t0 = tNear, t1 = tFar;
     for (int k = 0; k < 3; ++k) {

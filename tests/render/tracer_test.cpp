@@ -69,7 +69,7 @@ TEST(Tracer, EveryTraceFindsWhatTestingEveryPrimitiveFinds) {
         const double z = 2 * u(rng) - 1, phi = 2 * M_PI * u(rng), r = std::sqrt(1 - z * z);
         return Vec3(r * std::cos(phi), r * std::sin(phi), z);
     };
-    int steps = 0, hits = 0, fromTop = 0, skippedHairs = 0;
+    int steps = 0, hits = 0, skippedHairs = 0;
     for (int ray = 0; ray < 3000; ++ray) {
         Vec3 o, d = unit();
         switch (ray % 3) {
@@ -83,7 +83,6 @@ TEST(Tracer, EveryTraceFindsWhatTestingEveryPrimitiveFinds) {
                 const detail::Prim prim = prims[std::min<std::size_t>(8, std::size_t(9 * u(rng)))];
                 o = prim.cell.map(Vec3(u(rng), u(rng), 1));
                 d = Vec3(d.x(), d.y(), 0.2 + std::abs(d.z())).normalized();
-                ++fromTop;
             }
         }
         detail::SpanCache cache;
@@ -112,10 +111,9 @@ TEST(Tracer, EveryTraceFindsWhatTestingEveryPrimitiveFinds) {
             tNear = hit->span.tOut;
         }
     }
-    // Every kind of ray was exercised: many hits, walks across several cells.
+    // Many hits, and walks across several cells.
     EXPECT_GT(hits, 2000);
     EXPECT_GT(steps, 4000);
-    EXPECT_EQ(fromTop, 1000);
     std::printf("%d traces, %d hits, %d answered without Embree where a hair of a span was left\n", steps, hits,
                 skippedHairs);
 }
