@@ -120,7 +120,6 @@ double filterError(const Ellipsoid& result, std::span<const Ellipsoid> children,
     thread_local std::vector<double> buffer;  // one per thread, reused: this runs per sampled node
     buffer.resize(5 * n);
     const std::span<double> all(buffer);
-    std::fill(buffer.begin() + 3 * std::ptrdiff_t(n), buffer.end(), 0.0);
     const auto mixture = all.subspan(3 * n, n), own = all.subspan(4 * n, n);
     // The default set's arrays are made once (its points live as long as the process): copying
     // them on every call was a quarter of this function's own instructions in the octree build.
@@ -145,9 +144,15 @@ double filterError(const Ellipsoid& result, std::span<const Ellipsoid> children,
         arrays = all.subspan(0, 3 * n);
     }
     const auto x = arrays.subspan(0, n), y = arrays.subspan(n, n), z = arrays.subspan(2 * n, n);
+    // The first usable child sets the mixture's sums (there is one: totalWeight > 0), and the
+    // result sets its own: 0 + v is v bit for bit, so the sums are those of a zeroed start.
+    bool first = true;
     for (std::size_t i = 0; i < children.size(); ++i)
-        if (usableWeight(weights[i])) children[i].accumulateNormalizedNormalDistribution(x, y, z, weights[i], mixture);
-    result.accumulateNormalizedNormalDistribution(x, y, z, 1.0, own);
+        if (usableWeight(weights[i])) {
+            children[i].accumulateNormalizedNormalDistribution(x, y, z, weights[i], mixture, first);
+            first = false;
+        }
+    result.accumulateNormalizedNormalDistribution(x, y, z, 1.0, own, true);
     // The squared differences first, in a loop the compiler vectorises (a division each), then
     // summed in order, as the single loop summed them.
     for (std::size_t p = 0; p < n; ++p) {

@@ -103,25 +103,31 @@ Ellipsoid fromBasisAndSigma(const Mat3& basis, Vec3 sigma) {
 }
 
 // The loop of accumulateNormalizedNormalDistribution: out[i] += scale / (NᵀMN)² for the
-// directions N = (x[i], y[i], z[i]), M's unique entries in `m`. The octree build's filter error
-// runs it on 512 directions for every child of every sampled node, a third of a 256³ bush
-// build's instructions (callgrind), so it is also compiled for AVX2, chosen at load time where
-// the processor has it: four lanes per division instead of SSE2's two. Every lane rounds as
-// the scalar expression does, in the same order ("avx2" enables no FMA instruction to contract
-// it into), so either version gives the same sums bit for bit.
+// directions N = (x[i], y[i], z[i]), M's unique entries in `m` (out[i] = … when `start`, which
+// spares the caller zeroing the sums first: that zeroing was a tenth of a 256³ bush build's
+// instructions). The octree build's filter error runs it on 512 directions for every child of
+// every sampled node, a third of a 256³ bush build's instructions (callgrind), so it is also
+// compiled for AVX2, chosen at load time where the processor has it: four lanes per division
+// instead of SSE2's two. Every lane rounds as the scalar expression does, in the same order
+// ("avx2" enables no FMA instruction to contract it into), so either version gives the same sums
+// bit for bit.
 #if defined(__x86_64__) && defined(__has_attribute)
 #if __has_attribute(target_clones) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 #endif
 void accumulateNormalDistribution(const std::array<double, 6>& m, double scale, const double* px,
-                                  const double* py, const double* pz, std::size_t n, double* out) {
+                                  const double* py, const double* pz, std::size_t n, bool start, double* out) {
     const double m0 = m[0], m1 = m[1], m2 = m[2], m3 = m[3], m4 = m[4], m5 = m[5];
-    for (std::size_t i = 0; i < n; ++i) {
+    const auto value = [&](std::size_t i) {
         const double a = px[i], b = py[i], c = pz[i];
         const double nMn = m0 * a * a + m1 * b * b + m2 * c * c + 2 * (m3 * a * b + m4 * a * c + m5 * b * c);
-        out[i] += scale / (nMn * nMn);
-    }
+        return scale / (nMn * nMn);
+    };
+    if (start)
+        for (std::size_t i = 0; i < n; ++i) out[i] = value(i);
+    else
+        for (std::size_t i = 0; i < n; ++i) out[i] += value(i);
 }
 
 }  // namespace
@@ -296,12 +302,12 @@ Ellipsoid Ellipsoid::normalized(Normalization normalization) const {
 
 void Ellipsoid::accumulateNormalizedNormalDistribution(std::span<const double> x, std::span<const double> y,
                                                        std::span<const double> z, double weight,
-                                                       std::span<double> sums) const {
+                                                       std::span<double> sums, bool start) const {
     const std::size_t n = sums.size();
     if (x.size() != n || y.size() != n || z.size() != n)
         throw std::invalid_argument("accumulateNormalizedNormalDistribution: one sum per direction");
     const double scale = weight * (mDetM / mExactMeanArea);  // one division per direction, not two
-    accumulateNormalDistribution(mM, scale, x.data(), y.data(), z.data(), n, sums.data());
+    accumulateNormalDistribution(mM, scale, x.data(), y.data(), z.data(), n, start, sums.data());
 }
 
 Ellipsoid Ellipsoid::scaled(double factor) const {

@@ -139,10 +139,11 @@ public:
 
     /// Adds `weight`·f(N)/Ā (normalizedNormalDistribution, to rounding) to `sums[i]` for each
     /// direction N = (x[i], y[i], z[i]), in a loop the compiler vectorises (the filter error
-    /// evaluates eight children on 512 directions per sampled node).
+    /// evaluates eight children on 512 directions per sampled node). `start`: sets `sums[i]` to
+    /// it instead (the first term of a sum, which then needs no zeroing).
     void accumulateNormalizedNormalDistribution(std::span<const double> x, std::span<const double> y,
                                                 std::span<const double> z, double weight,
-                                                std::span<double> sums) const;
+                                                std::span<double> sums, bool start = false) const;
 
     /// A copy with every length multiplied by `factor` (> 0): areas scale by factor².
     Ellipsoid scaled(double factor) const;
