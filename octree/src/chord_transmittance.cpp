@@ -113,15 +113,13 @@ void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& 
     }
 }
 
-std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
-                                                          double tau, int chords, std::uint64_t seed) {
-    return measureChordTransmittance(tree, visible, tau, chords, seed, {});
-}
+namespace {
 
-std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
-                                                          double tau, int chords, std::uint64_t seed,
-                                                          const EnoughLevels& enough) {
-    std::vector<ChordTransmittance> out(tree.levels.size());
+// measureChordTransmittance's one body: levels 0 … levels − 1, level l at τ = tauAt(l).
+std::vector<ChordTransmittance> measureChords(const Octree& tree, const ChordVisibility& visible,
+                                              const std::function<double(std::size_t)>& tauAt, std::size_t levels,
+                                              int chords, std::uint64_t seed, const EnoughLevels& enough) {
+    std::vector<ChordTransmittance> out(std::min(levels, tree.levels.size()));
     if (chords <= 0) return out;
     const std::size_t count = std::size_t(chords);
     std::vector<Chord> lines(count);
@@ -136,7 +134,8 @@ std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, co
     double visibility = 0;
     for (char m : misses) visibility += m;
     visibility /= double(count);
-    for (std::size_t level = 0; level < tree.levels.size(); ++level) {
+    for (std::size_t level = 0; level < out.size(); ++level) {
+        const double tau = tauAt(level);
         std::vector<double> transmittance(count);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t j = r.begin(); j != r.end(); ++j)
@@ -151,6 +150,26 @@ std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, co
         }
     }
     return out;
+}
+
+}  // namespace
+
+std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+                                                          double tau, int chords, std::uint64_t seed) {
+    return measureChordTransmittance(tree, visible, tau, chords, seed, {});
+}
+
+std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+                                                          double tau, int chords, std::uint64_t seed,
+                                                          const EnoughLevels& enough) {
+    return measureChords(tree, visible, [tau](std::size_t) { return tau; }, tree.levels.size(), chords, seed, enough);
+}
+
+std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+                                                          const std::vector<double>& tauPerLevel, int chords,
+                                                          std::uint64_t seed) {
+    return measureChords(tree, visible, [&](std::size_t l) { return tauPerLevel[l]; }, tauPerLevel.size(), chords, seed,
+                         {});
 }
 
 namespace {

@@ -164,6 +164,8 @@ Json BuildWork::run(const std::vector<Stage>& stages, const Stage& self) const {
                           {"stored_nodes", tree.stats[l].storedNodes},
                           {"filter_error_mean", tree.stats[l].filterErrorMean},
                           {"chord_error", fidelity.chords[l].error()},
+                          {"chord_error_fitted", l < fidelity.fitted.size() ? Json(fidelity.fitted[l].error()) : Json()},
+                          {"level_fit_scale", l < fidelity.fitScale.size() ? Json(fidelity.fitScale[l]) : Json()},
                           {"beam_error_mean_abs", fidelity.beams[l].meanAbs},
                           {"beam_error_p95_abs", fidelity.beams[l].p95Abs}});
     return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels},

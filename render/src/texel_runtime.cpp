@@ -3,6 +3,7 @@
 
 #include <vtex/core/error.h>
 #include <vtex/octree/chord_transmittance.h>
+#include <vtex/render/source_visibility.h>
 
 #include "footprint.h"
 
@@ -11,20 +12,11 @@
 namespace vtex::render::detail {
 namespace {
 
-// The range of levels at which the volume lets through what the source mesh does, within
-// `tolerance` (absolute transmittance, mean over random chords of the whole texel): from the
-// coarsest level finer, the first level within the tolerance and the finer ones as long as each
-// stays within it. Coarser than that, a voxel spreads clustered leaves over its whole volume and
-// is too opaque; finer, a voxel stands for a piece of one opaque surface that the exponential
-// medium lets light through (and shadows itself). The measurement stops at the first level past
-// the run, so that a render does not read a lazily opened texel's finest levels (the bulk of its
-// file) only to measure them. When no level is within the tolerance, the level of least error
-// alone.
-struct FaithfulLevels {
-    int coarsest = 0, finest = 0;
-};
-FaithfulLevels faithfulLevels(const octree::Octree& tree, const octree::ChordVisibility& visible, double tau,
-                              double tolerance) {
+// The faithful levels (render::faithfulLevels), measured from the coarsest level finer and
+// stopping at the first level past the run, so that a render does not read a lazily opened
+// texel's finest levels (the bulk of its file) only to measure them.
+FaithfulLevels measureFaithfulLevels(const octree::Octree& tree, const octree::ChordVisibility& visible, double tau,
+                                     double tolerance) {
     int coarsest = -1;
     const auto chords = octree::measureChordTransmittance(
         tree, visible, tau, 4096, 1, [&](std::size_t level, const octree::ChordTransmittance& c) {
@@ -32,15 +24,7 @@ FaithfulLevels faithfulLevels(const octree::Octree& tree, const octree::ChordVis
             if (within && coarsest < 0) coarsest = int(level);
             return coarsest >= 0 && !within;
         });
-    if (coarsest >= 0) {
-        int finest = coarsest;
-        while (std::size_t(finest + 1) < chords.size() && std::abs(chords[std::size_t(finest + 1)].error()) <= tolerance) ++finest;
-        return {coarsest, finest};
-    }
-    std::size_t best = 0;
-    for (std::size_t l = 1; l < chords.size(); ++l)
-        if (std::abs(chords[l].error()) < std::abs(chords[best].error())) best = l;
-    return {int(best), int(best)};
+    return faithfulLevels(chords, tolerance);
 }
 
 }  // namespace
@@ -63,18 +47,16 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             t.sourceMesh = loadTexelSource(scene, index);
             auto source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
             const octree::ChordVisibility visible = [&](const Vec3& a, const Vec3& b) { return !source->occluded(a, b, 0); };
-            const FaithfulLevels faithful = faithfulLevels(*tree, visible, def.tau, options.hybridTolerance);
+            const FaithfulLevels faithful = measureFaithfulLevels(*tree, visible, def.tau, options.hybridTolerance);
             t.coarsestShadowLevel = faithful.coarsest;
             // Measured before the fit, the faithful levels keep saying where the volume's
             // chords differ from the mesh's per chord, which a scale per level does not change.
-            // 16 384 chords: a mean of them has a standard error ≤ 0.5/√16384 = 0.004; on a texel
-            // of clustered discs a fit then lets through what the mesh does within 0.003 on other
-            // chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
+            // kLevelFitChords: on a texel of clustered discs a fit then lets through what the mesh
+            // does within 0.003 on other chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
             // With the hybrid on, a level finer than the mesh level's next is never marched.
-            constexpr int kShellChords = 16384;
             const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest + 1) : 30u;
             if (options.fitLevels)
-                for (const octree::ShellChordFit& fit : octree::fitShellChords(*tree, visible, def.tau, kShellChords, 1, finest))
+                for (const octree::ShellChordFit& fit : octree::fitShellChords(*tree, visible, def.tau, kLevelFitChords, 1, finest))
                     t.levelScale.push_back(fit.scale);
             if (options.hybrid) {
                 t.meshLevel = faithful.finest;

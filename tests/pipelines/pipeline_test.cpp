@@ -93,6 +93,15 @@ TEST(Pipeline, RunsEndToEndThenEverythingIsCached) {
                 EXPECT_NEAR(levels[l][name].get<double>(), measured.get<double>(), 1e-9)
                     << texel << " level " << l << " " << name;
             }
+            // The fitted levels' error, where the build fitted the level, as inspect's.
+            if (chords["fitted"].is_null()) {
+                EXPECT_TRUE(levels[l]["chord_error_fitted"].is_null()) << texel << " level " << l;
+            } else {
+                EXPECT_NEAR(levels[l]["chord_error_fitted"].get<double>(), chords["fitted"]["error"].get<double>(), 1e-9)
+                    << texel << " level " << l;
+                EXPECT_NEAR(levels[l]["level_fit_scale"].get<double>(), chords["fitted"]["scale"].get<double>(), 1e-9)
+                    << texel << " level " << l;
+            }
         }
     }
 

@@ -215,3 +215,27 @@ TEST(ShellChords, AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords) {
     EXPECT_LT(vtex::octree::measureShellChords(tree, visible, 0, 1.0, 1, kChords, 2).error(), -0.1);
     EXPECT_GT(fits[6].scale, 1.0);  // a voxel across one disc: too transparent
 }
+
+// A τ per level (the fitted levels' figures in `vtex inspect --source`) walks the same chords as
+// one τ: level l with tauPerLevel[l] gives what the one-τ measure gives at τ = tauPerLevel[l],
+// bit for bit, and only the levels given are measured.
+TEST(ChordTransmittance, ATauPerLevelIsTheOneTauMeasureAtThatTau) {
+    const vtex::ingest::TriangleMesh mesh = clusteredDiscs(20, 60, 0.06f, 0.012f, 5);
+    vtex::sampler::SampleOptions sampling;
+    sampling.resolution = 32;
+    sampling.bounds = vtex::sampler::BoundsMode::Unit;
+    vtex::NullProgress quiet;
+    const vtex::octree::Octree tree = vtex::octree::buildOctree(vtex::sampler::sampleMesh(mesh, sampling, quiet), {}, quiet);
+    const vtex::render::SourceVisibility visibility(mesh, tree.info.source);
+    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return visibility.visible(a, b); };
+    const std::vector<double> taus = {0.3, 1.7, 0.9, 2.5};
+    const auto perLevel = vtex::octree::measureChordTransmittance(tree, visible, taus, 512, 3);
+    ASSERT_EQ(perLevel.size(), taus.size());
+    for (std::size_t l = 0; l < taus.size(); ++l) {
+        const auto one = vtex::octree::measureChordTransmittance(tree, visible, taus[l], 512, 3);
+        EXPECT_EQ(perLevel[l].visibility, one[l].visibility) << "level " << l;
+        EXPECT_EQ(perLevel[l].transmittance, one[l].transmittance) << "level " << l;
+    }
+    // A larger τ lets less through on the same chords.
+    EXPECT_LT(perLevel[3].transmittance, vtex::octree::measureChordTransmittance(tree, visible, 0.1, 512, 3)[3].transmittance);
+}

@@ -93,6 +93,22 @@ TEST(SamplerCli, InspectMeasuresEachLevelAgainstTheSource) {
     }
     EXPECT_LT(levels[0]["chords_against_source"]["error"].get<double>(), -0.1);
     EXPECT_LT(levels[3]["chords_against_source"]["error"].get<double>(), -0.02);
+    // The levels as the renderer fits them (issue 13's fix), on the same chords: at least the
+    // coarse levels are fitted (up to the faithful levels' finest + 1), each with a positive
+    // factor, and where the mean-density level is far off (|error| > 0.05) the fitted one's error
+    // is at most half of it (measured at 32³: level 0 −0.19 → −0.04).
+    ASSERT_TRUE(levels[0]["chords_against_source"]["fitted"].is_object());
+    for (const auto& level : levels) {
+        const auto& c = level["chords_against_source"];
+        if (c["fitted"].is_null()) continue;
+        const auto& f = c["fitted"];
+        EXPECT_GT(f["scale"].get<double>(), 0.0);
+        EXPECT_NEAR(f["error"].get<double>(), f["transmittance"].get<double>() - visibility, 1e-12);
+        if (std::abs(c["error"].get<double>()) > 0.05) {
+            EXPECT_LE(std::abs(f["error"].get<double>()), 0.5 * std::abs(c["error"].get<double>())) << level;
+        }
+    }
+    EXPECT_LT(levels[0]["chords_against_source"]["fitted"]["scale"].get<double>(), 1.0);
     EXPECT_GT(levels[5]["chords_against_source"]["transmittance"].get<double>(),
               levels[0]["chords_against_source"]["transmittance"].get<double>());
     r = runVtex({"inspect", vto.string(), "--source", glb.string()});

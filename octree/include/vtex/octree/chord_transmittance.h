@@ -41,6 +41,12 @@ struct ChordTransmittance {
 std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
                                                           double tau = 1, int chords = 4096, std::uint64_t seed = 1);
 
+/// The same chords, level l's densities scaled by tauPerLevel[l] instead of one τ (a fitted
+/// level's, fitShellChords's scale times τ): levels 0 … min(tauPerLevel.size(), levels) − 1.
+std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+                                                          const std::vector<double>& tauPerLevel, int chords = 4096,
+                                                          std::uint64_t seed = 1);
+
 /// Whether a level-by-level measurement has seen enough: called with each level's result in
 /// turn, coarsest first; true stops before the next level is read or walked.
 using EnoughLevels = std::function<bool(std::size_t level, const ChordTransmittance&)>;

@@ -34,12 +34,36 @@ private:
     std::unique_ptr<detail::SourceBvh> mBvh;
 };
 
+/// The range of levels at which the volume lets through what the source mesh does within
+/// `tolerance` (absolute transmittance, mean over random chords of the whole texel; `chords` from
+/// the coarsest level, possibly cut after the first level past the run): from the coarsest level
+/// finer, the first level within the tolerance and the finer ones as long as each stays within
+/// it. Coarser than that, a voxel spreads clustered leaves over its whole volume and is too
+/// opaque; finer, a voxel stands for a piece of one opaque surface that the exponential medium
+/// lets light through (and shadows itself). When no level is within the tolerance, the level of
+/// least error alone. The hybrid traces the mesh past the finest (docs/render.md, "Mesh where the
+/// volume is not faithful") and shadows keep to the coarsest.
+struct FaithfulLevels {
+    int coarsest = 0, finest = 0;
+};
+FaithfulLevels faithfulLevels(const std::vector<octree::ChordTransmittance>& chords, double tolerance);
+
+/// The shell chords the renderer fits each level's factor of τ over (`--level-fit`, docs/render.md
+/// "Levels fitted to the source"): a mean of them has a standard error ≤ 0.5/√16384 = 0.004.
+inline constexpr int kLevelFitChords = 16384;
+
 /// How faithful each level of a texel is to its source mesh (issue 13's measure): the
 /// transmittance along 4096 random chords of the whole texel, and over 256 beams of the level
-/// (mean, mean |error| and 95th percentile).
+/// (mean, mean |error| and 95th percentile); then the same chords through the levels as the
+/// renderer fits them (each level's densities times `fitScale`, fitted over kLevelFitChords shell
+/// chords at τ = 1), which is what a render with `--level-fit on` marches: the levels up to the
+/// faithful levels' finest + 1 at the renderer's default tolerance (finer ones the hybrid never
+/// marches, and fitting them would cost the finest levels' walks sixteen times over).
 struct SourceFidelity {
     std::vector<octree::ChordTransmittance> chords;
     std::vector<octree::BeamError> beams;
+    std::vector<double> fitScale;
+    std::vector<octree::ChordTransmittance> fitted;
 };
 SourceFidelity measureSourceFidelity(const octree::Octree& tree, const ingest::TriangleMesh& source);
 
