@@ -13,7 +13,7 @@
 # (`vtex reference` at TRUTH_SPP, near TRUTH_SPP_NEAR), its time against the two references',
 # and the issue's goals for the defaults as PASS/FAIL.
 # Optional: DENSE=1 also times far and mid with a 20 000-leaf bush sampled at 256³ (goal:
-# dense / sparse ≤ 1.15); SWEEP=1 renders defaults and the 1-spp reference at 12 distances,
+# dense / sparse ≤ 1.15), with their RMSE and bias against their own truths (TRUTH_SPP); SWEEP=1 renders defaults and the 1-spp reference at 12 distances,
 # geometric from near to far, against truths at SWEEP_TRUTH_SPP (64): mean green and RMSE.
 # Truths are cached in DIR/truth/, keyed by scene file, spp, source mesh and TRUTH_KEY ("v1";
 # change it when the reference renderer changes); a reused truth is announced.
@@ -57,10 +57,10 @@ if [ "$DENSE" = 1 ]; then
 fi
 python3 "$HELPER" plan "$WIDTH" "$HEIGHT" "$VARIANTS" "$DENSE" "$SWEEP"
 
-# truth VIEW SPP: truth_VIEW.exr → the cached truth/KEY.exr, rendered when missing
+# truth VIEW SPP [MESH]: truth_VIEW.exr → the cached truth/KEY.exr, rendered when missing
 truth() {
-  view=$1 spp=$2
-  key=$(python3 "$HELPER" truth-key "$view.toml" "$spp" bush.glb "$TRUTH_KEY")
+  view=$1 spp=$2 mesh=${3:-bush.glb}
+  key=$(python3 "$HELPER" truth-key "$view.toml" "$spp" "$mesh" "$TRUTH_KEY")
   if [ -f "truth/$key.exr" ]; then
     echo "truth $view: reusing truth/$key.exr ($spp spp)"
     how=cached
@@ -78,6 +78,10 @@ rm -f truths.txt
 truth far "$TRUTH_SPP"
 truth mid "$TRUTH_SPP"
 truth near "$TRUTH_SPP_NEAR"
+if [ "$DENSE" = 1 ]; then
+  truth far_dense "$TRUTH_SPP" bush_dense.glb
+  truth mid_dense "$TRUTH_SPP" bush_dense.glb
+fi
 if [ "$SWEEP" = 1 ]; then
   while read -r view _; do truth "$view" "$SWEEP_TRUTH_SPP"; done < sweep.txt
 fi

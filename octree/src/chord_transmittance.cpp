@@ -4,6 +4,7 @@
 #include <vtex/octree/cursor.h>
 #include <vtex/octree/voxel.h>
 
+#include "chord_sampling.h"
 #include "hash.h"
 
 
@@ -22,15 +23,10 @@
 namespace vtex::octree {
 namespace {
 
+using detail::ChordRng;
+using detail::chordDepth;
 using detail::mix64;
-
-struct ChordRng {
-    std::uint64_t state;
-    double next() {
-        state = mix64(state);
-        return double(state >> 11) * 0x1.0p-53;
-    }
-};
+using detail::randomShellChord;
 
 struct Chord {
     Vec3 a, b, direction;
@@ -61,8 +57,9 @@ Chord randomChord(const Vec3& lo, double h, ChordRng& rng) {
 }
 
 
-// The optical depth ∫ρÂ of the segment a → b through `level` of `tree`.
-double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b) {
+}  // namespace
+
+double detail::chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b) {
     double depth = 0;
     const Vec3 delta = b - a;
     const double length = delta.norm();
@@ -73,8 +70,6 @@ double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const 
     });
     return depth;
 }
-
-}  // namespace
 
 void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b,
                            const std::function<void(const OctreeNode&, double, double)>& visit) {
@@ -209,34 +204,6 @@ double percentile95(std::vector<double> values) {
     const std::size_t k = std::min(values.size() - 1, std::size_t(std::ceil(0.95 * double(values.size()))) - 1);
     std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(k), values.end());
     return values[k];
-}
-
-// A shell chord (see ShellChordFit) cut where it crosses the tiling's x and y planes into
-// segments of the unit cube, each shifted back into it.
-std::vector<std::pair<Vec3, Vec3>> randomShellChord(ChordRng& rng) {
-    constexpr double kMinCos = 0.17364817766693033;  // cos 80°
-    // Cosine-weighted: cos² uniform, here over [cos² 80°, 1].
-    const double mu = std::sqrt(kMinCos * kMinCos + (1 - kMinCos * kMinCos) * rng.next());
-    const double phi = 2 * std::numbers::pi * rng.next();
-    const double sinTheta = std::sqrt(std::max(0.0, 1 - mu * mu));
-    const Vec3 a(rng.next(), rng.next(), 1.0);
-    const Vec3 delta = Vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), -mu) / mu;  // to z = 0
-    std::vector<double> cuts{0.0, 1.0};
-    for (int k = 0; k < 2; ++k) {
-        if (!(std::abs(delta[k]) > 0)) continue;
-        const double lo = std::min(a[k], a[k] + delta[k]), hi = std::max(a[k], a[k] + delta[k]);
-        for (double plane = std::floor(lo) + 1; plane < hi; plane += 1) cuts.push_back((plane - a[k]) / delta[k]);
-    }
-    std::sort(cuts.begin(), cuts.end());
-    std::vector<std::pair<Vec3, Vec3>> segments;
-    for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
-        if (!(cuts[i + 1] > cuts[i])) continue;
-        const Vec3 middle = a + 0.5 * (cuts[i] + cuts[i + 1]) * delta;
-        const Vec3 shift(std::floor(middle.x()), std::floor(middle.y()), 0.0);
-        const auto inCube = [&](double t) { return (a + t * delta - shift).cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones()).eval(); };
-        segments.emplace_back(inCube(cuts[i]), inCube(cuts[i + 1]));
-    }
-    return segments;
 }
 
 // The chords of fitShellChords: whether each misses the source, and its optical depth ∫ρÂ at

@@ -346,6 +346,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
         if (!t.volume) continue;
         result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
         result.stats.levelScales.push_back(t.levelScale);
+        result.stats.shadowLevels.push_back(t.shadowLevels);
         detail::countVtoBytes(scene.texels[i], t.volume->tree(), result.stats);
     }
     result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
@@ -397,6 +398,7 @@ std::string formatStatsJson(const RenderStats& s) {
         j["mesh_segments"] = s.meshSegments;
         j["mesh_levels"] = s.meshLevels;
         j["level_scales"] = s.levelScales;
+        j["shadow_levels"] = s.shadowLevels;
         j["approximations"] = s.approximations;
     }
     if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;

@@ -226,13 +226,16 @@ public:
             });
     }
 
-    // A shadow march takes the single level nearest the cone's width (reference units), never
-    // coarser than the texel's coarsest faithful level (TexelRuntime): shadows are not blended.
+    // A shadow march takes a single level (shadows are not blended): the one nearest the cone's
+    // width (reference units), never coarser than the texel's coarsest faithful level, or with the
+    // levels fitted the level measured for that width (TexelRuntime::shadowLevels).
     int shadowLevel(const TexelRuntime& texel, double width) const {
         return shadowLevel(texel, chooseLevel(width, mOptions.lodBias, texel.volume->maxLevel()));
     }
     static int shadowLevel(const TexelRuntime& texel, const LevelChoice& choice) {
-        return std::max(texel.coarsestShadowLevel, choice.fineWeight < 0.5 ? choice.coarse : choice.fine);
+        const int footprint = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
+        if (footprint >= 0 && std::size_t(footprint) < texel.shadowLevels.size()) return texel.shadowLevels[std::size_t(footprint)];
+        return std::max(texel.coarsestShadowLevel, footprint);
     }
 
     // A march from cell coordinates r along the unit reference direction lr, at most `maxStep`

@@ -8,6 +8,7 @@
 #include "footprint.h"
 
 #include <cmath>
+#include <optional>
 
 namespace vtex::render::detail {
 namespace {
@@ -25,6 +26,35 @@ FaithfulLevels measureFaithfulLevels(const octree::Octree& tree, const octree::C
             return coarsest >= 0 && !within;
         });
     return faithfulLevels(chords, tolerance);
+}
+
+// The shadow level per footprint level f below the coarsest faithful level, for fitted levels
+// (TexelRuntime::shadowLevels). The rule without the fit takes the coarsest faithful level,
+// because the unfitted levels coarser than it are too opaque; fitted, they are not, and a dense
+// texel's fine voxels darken the leaves they stand for instead (docs/render.md, "Shadows at the
+// level that lights what is seen"). So, from that level toward f (what the footprint asks), a
+// coarser level is taken where its measured lit fraction (octree::measureLitFractions, camera
+// level f + 1: a shadow's cone is twice its camera ray's) is nearer the mesh's by more than twice
+// the mesh fraction's standard error: closer than that, the measurement cannot tell them apart
+// and the rule without the fit stands. 4096 chords, as the faithful levels are measured with.
+std::vector<int> measuredShadowLevels(const octree::Octree& tree, const SourceBvh& source,
+                                      const octree::ChordVisibility& visible, double tau,
+                                      const std::vector<double>& scales, int coarsest) {
+    if (coarsest <= 0) return {};
+    const octree::ChordFirstHit hit = [&](const Vec3& a, const Vec3& b) -> std::optional<double> {
+        if (const auto h = source.intersect(a, b, 0)) return h->s;
+        return std::nullopt;
+    };
+    const octree::LitFractions lit = octree::measureLitFractions(tree, hit, visible, tau, scales, std::size_t(coarsest), 4096, 1);
+    const double margin = 2 * lit.meshStandardError();
+    std::vector<int> levels;
+    for (std::size_t f = 0; f < std::size_t(coarsest) && f + 1 < lit.volume.size(); ++f) {
+        std::size_t best = std::size_t(coarsest);
+        for (std::size_t l = best; l-- > f;)
+            if (std::abs(lit.error(f + 1, l)) < std::abs(lit.error(f + 1, best)) - margin) best = l;
+        levels.push_back(int(best));
+    }
+    return levels;
 }
 
 }  // namespace
@@ -55,9 +85,11 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             // does within 0.003 on other chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
             // With the hybrid on, a level finer than the mesh level's next is never marched.
             const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest + 1) : 30u;
-            if (options.fitLevels)
+            if (options.fitLevels) {
                 for (const octree::ShellChordFit& fit : octree::fitShellChords(*tree, visible, def.tau, kLevelFitChords, 1, finest))
                     t.levelScale.push_back(fit.scale);
+                t.shadowLevels = measuredShadowLevels(*tree, *source, visible, def.tau, t.levelScale, faithful.coarsest);
+            }
             if (options.hybrid) {
                 t.meshLevel = faithful.finest;
                 t.source = std::move(source);

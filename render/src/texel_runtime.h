@@ -31,6 +31,10 @@ struct TexelRuntime {
     /// transmittance is within the hybrid's tolerance of the mesh's (0 without a source). A
     /// shadow needs no antialiasing, and coarser levels are measurably too opaque.
     int coarsestShadowLevel = 0;
+    /// With the levels fitted, the shadow level per footprint level below coarsestShadowLevel:
+    /// measured, between the footprint's and coarsestShadowLevel (texel_runtime.cpp,
+    /// measuredShadowLevels). Empty, or a footprint past its end: max(coarsestShadowLevel, footprint).
+    std::vector<int> shadowLevels;
     /// Per level, the factor of τ fitted so that the level lets through, on chords crossing the
     /// shell from its top to its floor, what the source mesh does (octree::fitShellChords;
     /// RenderOptions::fitLevels); empty: τ at every level.

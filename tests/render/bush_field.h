@@ -34,6 +34,14 @@ inline SourcedTexel makeSourcedTexel(const std::string& name, int count, int res
 
 inline SourcedTexel makeBush(int leaves, int resolution) { return makeSourcedTexel("bush", leaves, resolution); }
 
+// The mean colour of an image's pixels.
+inline Color imageMean(const Image& image) {
+    Color sum = Color::Zero();
+    for (std::size_t i = 0; i < image.pixels(); ++i)
+        for (int c = 0; c < 3; ++c) sum[c] += image.rgba[4 * i + std::size_t(c)];
+    return sum / double(image.pixels());
+}
+
 // Adds `texel` with its source mesh to a scene; returns its index.
 inline std::size_t addSourcedTexel(Scene& scene, const SourcedTexel& texel, double tau = 1) {
     const std::size_t index = addTexel(scene, texel.tree, tau);

@@ -17,17 +17,6 @@
 using namespace vtex::render;
 using namespace vtex::render::test;
 
-namespace {
-
-Color imageMean(const Image& image) {
-    Color sum = Color::Zero();
-    for (std::size_t i = 0; i < image.pixels(); ++i)
-        for (int c = 0; c < 3; ++c) sum[c] += image.rgba[4 * i + std::size_t(c)];
-    return sum / double(image.pixels());
-}
-
-}  // namespace
-
 // Near, where a leaf covers many pixels, the texel render traces the source mesh and so agrees
 // with the explicit-geometry reference: the volume there is darker by the self-shadowing of its
 // leaves' own voxels (docs/render.md, "Mesh where the volume is not faithful").

@@ -14,8 +14,10 @@
 
 #include <vtex/octree/octree.h>
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace vtex::octree {
@@ -103,6 +105,35 @@ std::vector<ShellChordFit> fitShellChords(const Octree& tree, const ChordVisibil
 /// chords it was not fitted on).
 ShellChordFit measureShellChords(const Octree& tree, const ChordVisibility& visible, std::uint32_t level,
                                  double scale, double tau = 1, int chords = 4096, std::uint64_t seed = 1);
+
+/// Where the segment a → b (inside the unit cube) first meets a source surface, as a fraction of
+/// its length; none when it misses. Called concurrently from several threads.
+using ChordFirstHit = std::function<std::optional<double>(const Vec3& a, const Vec3& b)>;
+
+/// How often what a camera sees of the texel is lit, through the source mesh and through the
+/// levels (issue 12: a voxel shadows the leaves it stands for, the more so the denser and finer it
+/// is, and a coarse one the clump around it). Camera chords are fitShellChords's; a light direction
+/// per chord is drawn as the chords' own (cosine-weighted over the upper hemisphere, zenith ≤ 80°).
+/// On the mesh: the first surface the chord meets, and whether a ray from it toward the light
+/// reaches the top face through the tiled texel (the surface itself skipped: its orientation is
+/// the reflectance's business, not the shadow's). In the volume at camera level c (densities ×
+/// scales[c]): a point drawn where the chord's march puts its weight (density ∝ T·σ along the
+/// chord, the share of the pixel each voxel gets) and the transmittance toward the light from it at
+/// shadow level l (densities × scales[l]), each chord weighted by its opacity 1 − T. Measured for
+/// shadow levels c − 1 … finestShadowLevel (a shadow's cone is never narrower than its camera
+/// ray's; NaN elsewhere) and camera levels up to finestShadowLevel + 1, all below scales.size() and
+/// the tree's levels. A pure function of `seed`, whatever the thread count.
+struct LitFractions {
+    double mesh = 1;                          ///< fraction of the mesh's seen points that are lit
+    std::size_t seen = 0;                     ///< chords whose first surface the mesh shows
+    std::vector<std::vector<double>> volume;  ///< [camera level][shadow level]
+    double error(std::size_t camera, std::size_t shadow) const { return volume[camera][shadow] - mesh; }
+    /// The binomial standard error of `mesh` (0.5/√seen at most), the noise every error shares.
+    double meshStandardError() const { return seen > 0 ? std::sqrt(mesh * (1 - mesh) / double(seen)) : 0; }
+};
+LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, const ChordVisibility& visible,
+                                 double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
+                                 int chords, std::uint64_t seed = 1);
 
 /// Visits the non-empty voxels of `level` that the segment a → b (inside the unit cube) crosses,
 /// front to back, as visit(node that stands for the voxel, t0, t1) with [t0, t1] the distances

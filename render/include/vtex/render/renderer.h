@@ -158,6 +158,10 @@ struct RenderStats {
     std::vector<double> meshLevels;
     /// Per texel, the factor of τ of each level (RenderOptions::fitLevels; empty: not fitted).
     std::vector<std::vector<double>> levelScales;
+    /// Per texel, the shadow level of each footprint level below its coarsest faithful level, as
+    /// measured for fitted levels (docs/render.md, "Shadows at the level that lights what is
+    /// seen"; empty: the footprint's level, never coarser than the coarsest faithful one).
+    std::vector<std::vector<int>> shadowLevels;
     /// Texel renders: "exact", or ApproximationBudget::key() of the budget used.
     std::string approximations;
     /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:

@@ -1,0 +1,79 @@
+// Random chords of a texel, shared by the measures of chord_transmittance.cpp and
+// lit_fractions.cpp: a counter-based generator (a pure function of seed and chord index, so that
+// a measure does not depend on the thread count), the shell's cosine-weighted directions, the
+// tiling of a segment into unit-cube pieces, and the optical depth of a level along a segment.
+#pragma once
+
+#include <vtex/octree/octree.h>
+
+#include "hash.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+namespace vtex::octree::detail {
+
+struct ChordRng {
+    std::uint64_t state;
+    double next() {
+        state = mix64(state);
+        return double(state >> 11) * 0x1.0p-53;
+    }
+};
+
+using Segments = std::vector<std::pair<Vec3, Vec3>>;
+
+/// A direction of the upper hemisphere, cosine-weighted (the flux through a horizontal face), zenith
+/// angles up to 80°: cos² uniform over [cos² 80°, 1].
+inline Vec3 randomUpward(ChordRng& rng) {
+    constexpr double kMinCos = 0.17364817766693033;  // cos 80°
+    const double mu = std::sqrt(kMinCos * kMinCos + (1 - kMinCos * kMinCos) * rng.next());
+    const double phi = 2 * std::numbers::pi * rng.next();
+    const double sinTheta = std::sqrt(std::max(0.0, 1 - mu * mu));
+    return {sinTheta * std::cos(phi), sinTheta * std::sin(phi), mu};
+}
+
+/// The segment a → a + delta cut where it crosses the tiling's x and y planes into segments of
+/// the unit cube, each shifted back into it (the texel tiled in x and y, as a flat field repeats it).
+inline Segments tiledSegments(const Vec3& a, const Vec3& delta) {
+    std::vector<double> cuts{0.0, 1.0};
+    for (int k = 0; k < 2; ++k) {
+        if (!(std::abs(delta[k]) > 0)) continue;
+        const double lo = std::min(a[k], a[k] + delta[k]), hi = std::max(a[k], a[k] + delta[k]);
+        for (double plane = std::floor(lo) + 1; plane < hi; plane += 1) cuts.push_back((plane - a[k]) / delta[k]);
+    }
+    std::sort(cuts.begin(), cuts.end());
+    Segments segments;
+    for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+        if (!(cuts[i + 1] > cuts[i])) continue;
+        const Vec3 middle = a + 0.5 * (cuts[i] + cuts[i + 1]) * delta;
+        const Vec3 shift(std::floor(middle.x()), std::floor(middle.y()), 0.0);
+        const auto inCube = [&](double t) { return (a + t * delta - shift).cwiseMax(Vec3::Zero()).cwiseMin(Vec3::Ones()).eval(); };
+        segments.emplace_back(inCube(cuts[i]), inCube(cuts[i + 1]));
+    }
+    return segments;
+}
+
+/// A shell chord (see ShellChordFit): from a uniform point of the top face down to the floor along
+/// a cosine-weighted direction, through the tiled texel.
+inline Segments randomShellChord(ChordRng& rng) {
+    const Vec3 up = randomUpward(rng);
+    const Vec3 a(rng.next(), rng.next(), 1.0);
+    return tiledSegments(a, Vec3(up.x(), up.y(), -up.z()) / up.z());  // down to z = 0
+}
+
+/// The optical depth ∫ρÂ of the segment a → b through `level` of `tree` (chord_transmittance.cpp).
+double chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b);
+
+/// The same over a chord cut into segments.
+inline double chordDepth(const Octree& tree, std::uint32_t level, const Segments& segments) {
+    double depth = 0;
+    for (const auto& [a, b] : segments) depth += chordDepth(tree, level, a, b);
+    return depth;
+}
+
+}  // namespace vtex::octree::detail

@@ -1,0 +1,114 @@
+// See chord_transmittance.h, measureLitFractions.
+#include <vtex/octree/chord_transmittance.h>
+
+#include <vtex/octree/voxel.h>
+
+#include "chord_sampling.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+namespace vtex::octree {
+namespace {
+
+using detail::ChordRng;
+using detail::chordDepth;
+using detail::mix64;
+using detail::Segments;
+
+// The point of the chord at which its optical depth (∫ρÂ · scale) reaches `target`; the chord's
+// end where it never does (rounding).
+Vec3 pointAtDepth(const Octree& tree, std::uint32_t level, const Segments& segments, double scale, double target) {
+    double depth = 0;
+    std::optional<Vec3> found;
+    for (const auto& [a, b] : segments) {
+        const Vec3 w = (b - a).normalized();
+        forEachVoxelOnSegment(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
+            if (found) return;
+            const double sigma = scale * double(node.data.density) * unpackS(node.data).projectedArea(w);
+            if (sigma > 0 && depth + sigma * (t1 - t0) >= target) found = a + (t0 + (target - depth) / sigma) * w;
+            else depth += sigma * (t1 - t0);
+        });
+        if (found) return *found;
+    }
+    return segments.back().second;
+}
+
+// The segments from p along the unit upward direction `up` to the top face, through the tiled texel.
+Segments toTheTop(const Vec3& p, const Vec3& up) { return detail::tiledSegments(p, up * (std::max(0.0, 1 - p.z()) / up.z())); }
+
+// What one chord gives: whether the mesh sees a surface there and lights it; per camera level the
+// volume's opacity and, per shadow level, its transmittance toward the light.
+struct ChordLight {
+    bool seen = false, lit = false;
+    std::vector<double> opacity, shadow;  ///< [c], [c · levels + l]
+};
+
+}  // namespace
+
+LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, const ChordVisibility& visible,
+                                 double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
+                                 int chords, std::uint64_t seed) {
+    const std::size_t levels = std::min(scales.size(), tree.levels.size());
+    const std::size_t shadowEnd = std::min(finestShadowLevel + 1, levels), cameraEnd = std::min(shadowEnd + 1, levels);
+    LitFractions out;
+    out.volume.assign(cameraEnd, std::vector<double>(levels, std::numeric_limits<double>::quiet_NaN()));
+    if (chords <= 0 || levels == 0) return out;
+    // A shadow ray leaves a mesh surface this far along the light (1e-5 of the cube, the renderer's
+    // gap) so that the surface does not shadow itself.
+    constexpr double kGap = 1e-5;
+    const auto firstShadow = [](std::size_t c) { return c == 0 ? std::size_t(0) : c - 1; };
+    std::vector<ChordLight> traced(static_cast<std::size_t>(chords));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, traced.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t j = r.begin(); j != r.end(); ++j) {
+            ChordRng rng{mix64(seed ^ mix64(0x117ull + std::uint64_t(j)))};
+            const Segments chord = detail::randomShellChord(rng);
+            const Vec3 light = detail::randomUpward(rng);
+            const double u = rng.next();
+            ChordLight& t = traced[j];
+            for (const auto& [a, b] : chord)
+                if (const std::optional<double> s = hit(a, b)) {
+                    t.seen = true;
+                    t.lit = true;
+                    for (const auto& [c, d] : toTheTop(a + *s * (b - a) + kGap * light, light)) t.lit = t.lit && visible(c, d);
+                    break;
+                }
+            t.opacity.assign(cameraEnd, 0.0);
+            t.shadow.assign(cameraEnd * levels, 0.0);
+            for (std::size_t c = 0; c < cameraEnd; ++c) {
+                const double scale = tau * scales[c];
+                const double alpha = 1 - std::exp(-scale * chordDepth(tree, std::uint32_t(c), chord));
+                t.opacity[c] = alpha;
+                if (!(alpha > 0)) continue;
+                // Inverse-CDF sampling of the weight T·σ: the depth d at which 1 − e^−d = u·α.
+                const Segments ray = toTheTop(pointAtDepth(tree, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha)), light);
+                for (std::size_t l = firstShadow(c); l < shadowEnd; ++l)
+                    t.shadow[c * levels + l] = std::exp(-tau * scales[l] * chordDepth(tree, std::uint32_t(l), ray));
+            }
+        }
+    });
+    double seen = 0, lit = 0;  // in chord order: the same whatever the schedule
+    for (const ChordLight& t : traced) {
+        seen += t.seen;
+        lit += t.lit;
+    }
+    out.mesh = seen > 0 ? lit / seen : 1;
+    out.seen = std::size_t(seen);
+    for (std::size_t c = 0; c < cameraEnd; ++c) {
+        double weight = 0;
+        std::vector<double> sum(levels, 0.0);
+        for (const ChordLight& t : traced) {
+            weight += t.opacity[c];
+            for (std::size_t l = firstShadow(c); l < shadowEnd; ++l) sum[l] += t.opacity[c] * t.shadow[c * levels + l];
+        }
+        for (std::size_t l = firstShadow(c); l < shadowEnd; ++l) out.volume[c][l] = weight > 0 ? sum[l] / weight : 1;
+    }
+    return out;
+}
+
+}  // namespace vtex::octree
