@@ -230,13 +230,17 @@ public:
     // width (reference units), never coarser than the texel's coarsest faithful level, or with the
     // levels fitted the level measured for that width (TexelRuntime::shadowLevels).
     int shadowLevel(const TexelRuntime& texel, double width) const {
-        return shadowLevel(texel, chooseLevel(width, mOptions.lodBias, texel.volume->maxLevel()));
+        return texel.shadowLevelFor(shadowFootprint(texel, width));
     }
     static int shadowLevel(const TexelRuntime& texel, const LevelChoice& choice) {
-        const int footprint = choice.fineWeight < 0.5 ? choice.coarse : choice.fine;
-        if (footprint >= 0 && std::size_t(footprint) < texel.shadowLevels.size()) return texel.shadowLevels[std::size_t(footprint)];
-        return std::max(texel.coarsestShadowLevel, footprint);
+        return texel.shadowLevelFor(footprintOf(choice));
     }
+    // The level a shadow cone of `width` asks for, before the texel's rule: the single level
+    // nearest it (monotone in the width).
+    int shadowFootprint(const TexelRuntime& texel, double width) const {
+        return footprintOf(chooseLevel(width, mOptions.lodBias, texel.volume->maxLevel()));
+    }
+    static int footprintOf(const LevelChoice& choice) { return choice.fineWeight < 0.5 ? choice.coarse : choice.fine; }
 
     // A march from cell coordinates r along the unit reference direction lr, at most `maxStep`
     // far (reference units) and not past the cell's sides, top or floor: its transmittance, where

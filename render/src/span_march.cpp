@@ -95,12 +95,16 @@ double SpanMarcher::shadowWidth(const SpanContext& span, double s) const {
 }
 
 int SpanMarcher::constantShadowLevel(SpanContext& span) const {
-    // The width grows linearly along the span and the level with it (monotonically): when both
-    // ends take the same level, every query does.
+    // The width grows linearly along the span and the footprint level with it (monotonically):
+    // every query's footprint lies between the ends', so when all of those take the same shadow
+    // level (TexelRuntime::shadowLevelFor, which need not be monotone), every query does.
     if (span.shadowLevel == -2) {
-        const int first = mShadows.shadowLevel(span.texel, shadowWidth(span, 0) / span.scale);
-        const int last = mShadows.shadowLevel(span.texel, shadowWidth(span, span.length) / span.scale);
-        span.shadowLevel = first == last ? first : -1;
+        const int first = mShadows.shadowFootprint(span.texel, shadowWidth(span, 0) / span.scale);
+        const int last = mShadows.shadowFootprint(span.texel, shadowWidth(span, span.length) / span.scale);
+        const int level = span.texel.shadowLevelFor(first);
+        span.shadowLevel = level;
+        for (int f = std::min(first, last); f <= std::max(first, last); ++f)
+            if (span.texel.shadowLevelFor(f) != level) span.shadowLevel = -1;
     }
     return span.shadowLevel;
 }

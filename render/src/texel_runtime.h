@@ -35,6 +35,11 @@ struct TexelRuntime {
     /// measured, between the footprint's and coarsestShadowLevel (texel_runtime.cpp,
     /// measuredShadowLevels). Empty, or a footprint past its end: max(coarsestShadowLevel, footprint).
     std::vector<int> shadowLevels;
+    /// The level a shadow march takes where its cone asks for level `footprint`.
+    int shadowLevelFor(int footprint) const {
+        if (footprint >= 0 && std::size_t(footprint) < shadowLevels.size()) return shadowLevels[std::size_t(footprint)];
+        return std::max(coarsestShadowLevel, footprint);
+    }
     /// Per level, the factor of τ fitted so that the level lets through, on chords crossing the
     /// shell from its top to its floor, what the source mesh does (octree::fitShellChords;
     /// RenderOptions::fitLevels); empty: τ at every level.
