@@ -18,6 +18,7 @@
 #include <bit>
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <numbers>
 #include <random>
@@ -160,6 +161,26 @@ vtex::ingest::TriangleMesh clusteredDiscs(int clusters, int perCluster, float sp
     return mesh;
 }
 
+// clusteredDiscs sampled at `resolution`³ into the unit cube and built, with the visibility of
+// segments through the discs.
+struct DiscTexel {
+    vtex::ingest::TriangleMesh mesh;
+    vtex::octree::Octree tree;
+    std::unique_ptr<const vtex::render::SourceVisibility> visibility;
+    bool visible(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const { return visibility->visible(a, b); }
+};
+std::unique_ptr<DiscTexel> clusteredDiscTexel(int clusters, int perCluster, std::uint32_t seed, int resolution) {
+    auto texel = std::make_unique<DiscTexel>();
+    texel->mesh = clusteredDiscs(clusters, perCluster, 0.06f, 0.012f, seed);
+    vtex::sampler::SampleOptions sampling;
+    sampling.resolution = resolution;
+    sampling.bounds = vtex::sampler::BoundsMode::Unit;
+    vtex::NullProgress quiet;
+    texel->tree = vtex::octree::buildOctree(vtex::sampler::sampleMesh(texel->mesh, sampling, quiet), {}, quiet);
+    texel->visibility = std::make_unique<const vtex::render::SourceVisibility>(texel->mesh, texel->tree.info.source);
+    return texel;
+}
+
 }  // namespace
 
 // Closed forms for the chords of the shell fit. Their directions are cosine-weighted over zenith
@@ -192,14 +213,9 @@ TEST(ShellChords, FollowTheirClosedForms) {
 // over whole voxels and are too opaque, its finest too transparent; once fitted, every level
 // lets through what the discs do, on shell chords it was not fitted on, within their noise.
 TEST(ShellChords, AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords) {
-    const vtex::ingest::TriangleMesh mesh = clusteredDiscs(40, 120, 0.06f, 0.012f, 11);
-    vtex::sampler::SampleOptions sampling;
-    sampling.resolution = 64;
-    sampling.bounds = vtex::sampler::BoundsMode::Unit;
-    vtex::NullProgress quiet;
-    const vtex::octree::Octree tree = vtex::octree::buildOctree(vtex::sampler::sampleMesh(mesh, sampling, quiet), {}, quiet);
-    const vtex::render::SourceVisibility visibility(mesh, tree.info.source);
-    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return visibility.visible(a, b); };
+    const auto discs = clusteredDiscTexel(40, 120, 11, 64);
+    const vtex::octree::Octree& tree = discs->tree;
+    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return discs->visible(a, b); };
     constexpr int kChords = 16384;
     const auto fits = vtex::octree::fitShellChords(tree, visible, 1, kChords);
     ASSERT_EQ(fits.size(), 7u);
@@ -221,14 +237,9 @@ TEST(ShellChords, AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords) {
 // one τ: level l with tauPerLevel[l] gives what the one-τ measure gives at τ = tauPerLevel[l],
 // bit for bit, and only the levels given are measured.
 TEST(ChordTransmittance, ATauPerLevelIsTheOneTauMeasureAtThatTau) {
-    const vtex::ingest::TriangleMesh mesh = clusteredDiscs(20, 60, 0.06f, 0.012f, 5);
-    vtex::sampler::SampleOptions sampling;
-    sampling.resolution = 32;
-    sampling.bounds = vtex::sampler::BoundsMode::Unit;
-    vtex::NullProgress quiet;
-    const vtex::octree::Octree tree = vtex::octree::buildOctree(vtex::sampler::sampleMesh(mesh, sampling, quiet), {}, quiet);
-    const vtex::render::SourceVisibility visibility(mesh, tree.info.source);
-    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return visibility.visible(a, b); };
+    const auto discs = clusteredDiscTexel(20, 60, 5, 32);
+    const vtex::octree::Octree& tree = discs->tree;
+    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return discs->visible(a, b); };
     const std::vector<double> taus = {0.3, 1.7, 0.9, 2.5};
     const auto perLevel = vtex::octree::measureChordTransmittance(tree, visible, taus, 512, 3);
     ASSERT_EQ(perLevel.size(), taus.size());
