@@ -26,9 +26,11 @@ using detail::Segments;
 Vec3 pointAtDepth(const Octree& tree, std::uint32_t level, const Segments& segments, double scale, double target) {
     double depth = 0;
     std::optional<Vec3> found;
-    for (const auto& [a, b] : segments) {
-        const Vec3 w = (b - a).normalized();
-        forEachVoxelOnSegment(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
+    for (const auto& segment : segments) {
+        // Not a structured binding: Clang 14 (the fuzz build) cannot capture one in a lambda.
+        const Vec3& a = segment.first;
+        const Vec3 w = (segment.second - a).normalized();
+        forEachVoxelOnSegment(tree, level, a, segment.second, [&](const OctreeNode& node, double t0, double t1) {
             if (found) return;
             const double sigma = scale * double(node.data.density) * unpackS(node.data).projectedArea(w);
             if (sigma > 0 && depth + sigma * (t1 - t0) >= target) found = a + (t0 + (target - depth) / sigma) * w;
