@@ -5,6 +5,7 @@
 #pragma once
 
 #include <vtex/octree/octree.h>
+#include <vtex/octree/voxel.h>
 
 #include "hash.h"
 
@@ -64,6 +65,11 @@ inline Segments randomShellChord(ChordRng& rng) {
     const Vec3 up = randomUpward(rng);
     const Vec3 a(rng.next(), rng.next(), 1.0);
     return tiledSegments(a, Vec3(up.x(), up.y(), -up.z()) / up.z());  // down to z = 0
+}
+
+/// A voxel's extinction per unit length along the unit direction w, before τ: ρ·Â(w).
+inline double voxelExtinction(const OctreeNode& node, const Vec3& w) {
+    return double(node.data.density) * unpackS(node.data).projectedArea(w);
 }
 
 /// The optical depth ∫ρÂ of the segment a → b through `level` of `tree` (chord_transmittance.cpp).

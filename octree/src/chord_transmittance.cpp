@@ -66,7 +66,7 @@ double detail::chordDepth(const Octree& tree, std::uint32_t level, const Vec3& a
     if (!(length > 0)) return depth;
     const Vec3 w = delta / length;
     forEachVoxelOnSegment(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
-        depth += double(node.data.density) * unpackS(node.data).projectedArea(w) * (t1 - t0);
+        depth += voxelExtinction(node, w) * (t1 - t0);
     });
     return depth;
 }

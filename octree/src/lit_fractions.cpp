@@ -1,8 +1,6 @@
 // See chord_transmittance.h, measureLitFractions.
 #include <vtex/octree/chord_transmittance.h>
 
-#include <vtex/octree/voxel.h>
-
 #include "chord_sampling.h"
 
 #include <tbb/blocked_range.h>
@@ -32,7 +30,7 @@ Vec3 pointAtDepth(const Octree& tree, std::uint32_t level, const Segments& segme
         const Vec3 w = (segment.second - a).normalized();
         forEachVoxelOnSegment(tree, level, a, segment.second, [&](const OctreeNode& node, double t0, double t1) {
             if (found) return;
-            const double sigma = scale * double(node.data.density) * unpackS(node.data).projectedArea(w);
+            const double sigma = scale * detail::voxelExtinction(node, w);
             if (sigma > 0 && depth + sigma * (t1 - t0) >= target) found = a + (t0 + (target - depth) / sigma) * w;
             else depth += sigma * (t1 - t0);
         });
@@ -57,7 +55,8 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
                                  double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
                                  int chords, std::uint64_t seed) {
     const std::size_t levels = std::min(scales.size(), tree.levels.size());
-    const std::size_t shadowEnd = std::min(finestShadowLevel + 1, levels), cameraEnd = std::min(shadowEnd + 1, levels);
+    // Camera level c needs shadow levels c − 1 and finer: none past finestShadowLevel.
+    const std::size_t shadowEnd = std::min(finestShadowLevel + 1, levels), cameraEnd = shadowEnd;
     LitFractions out;
     out.volume.assign(cameraEnd, std::vector<double>(levels, std::numeric_limits<double>::quiet_NaN()));
     if (chords <= 0 || levels == 0) return out;

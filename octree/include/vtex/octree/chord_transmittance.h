@@ -120,9 +120,9 @@ using ChordFirstHit = std::function<std::optional<double>(const Vec3& a, const V
 /// scales[c]): a point drawn where the chord's march puts its weight (density ∝ T·σ along the
 /// chord, the share of the pixel each voxel gets) and the transmittance toward the light from it at
 /// shadow level l (densities × scales[l]), each chord weighted by its opacity 1 − T. Measured for
-/// shadow levels c − 1 … finestShadowLevel (a shadow's cone is never narrower than its camera
-/// ray's; NaN elsewhere) and camera levels up to finestShadowLevel + 1, all below scales.size() and
-/// the tree's levels. A pure function of `seed`, whatever the thread count.
+/// camera and shadow levels up to finestShadowLevel, all below scales.size() and the tree's levels,
+/// shadow levels from c − 1 (a shadow's cone is never narrower than its camera ray's; NaN
+/// elsewhere). A pure function of `seed`, whatever the thread count.
 struct LitFractions {
     double mesh = 1;                          ///< fraction of the mesh's seen points that are lit
     std::size_t seen = 0;                     ///< chords whose first surface the mesh shows
