@@ -53,7 +53,7 @@ struct ChordLight {
 
 LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, const ChordVisibility& visible,
                                  double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
-                                 int chords, std::uint64_t seed) {
+                                 int chords, std::uint64_t seed, const LitPairs& wanted) {
     const std::size_t levels = std::min(scales.size(), tree.levels.size());
     // Camera level c needs shadow levels c − 1 and finer: none past finestShadowLevel.
     const std::size_t shadowEnd = std::min(finestShadowLevel + 1, levels), cameraEnd = shadowEnd;
@@ -64,6 +64,7 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
     // gap) so that the surface does not shadow itself.
     constexpr double kGap = 1e-5;
     const auto firstShadow = [](std::size_t c) { return c == 0 ? std::size_t(0) : c - 1; };
+    const auto measured = [&](std::size_t c, std::size_t l) { return !wanted || wanted(c, l); };
     std::vector<ChordLight> traced(static_cast<std::size_t>(chords));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, traced.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j != r.end(); ++j) {
@@ -89,7 +90,7 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
                 // Inverse-CDF sampling of the weight T·σ: the depth d at which 1 − e^−d = u·α.
                 const Segments ray = toTheTop(pointAtDepth(tree, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha)), light);
                 for (std::size_t l = firstShadow(c); l < shadowEnd; ++l)
-                    t.shadow[c * levels + l] = std::exp(-tau * scales[l] * chordDepth(tree, std::uint32_t(l), ray));
+                    if (measured(c, l)) t.shadow[c * levels + l] = std::exp(-tau * scales[l] * chordDepth(tree, std::uint32_t(l), ray));
             }
         }
     });
@@ -107,7 +108,8 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
             weight += t.opacity[c];
             for (std::size_t l = firstShadow(c); l < shadowEnd; ++l) sum[l] += t.opacity[c] * t.shadow[c * levels + l];
         }
-        for (std::size_t l = firstShadow(c); l < shadowEnd; ++l) out.volume[c][l] = weight > 0 ? sum[l] / weight : 1;
+        for (std::size_t l = firstShadow(c); l < shadowEnd; ++l)
+            if (measured(c, l)) out.volume[c][l] = weight > 0 ? sum[l] / weight : 1;
     }
     return out;
 }

@@ -16,6 +16,11 @@ SourceVisibility::~SourceVisibility() = default;
 
 bool SourceVisibility::visible(const Vec3& a, const Vec3& b) const { return !mBvh->occluded(a, b, 0); }
 
+std::optional<double> SourceVisibility::firstHit(const Vec3& a, const Vec3& b) const {
+    if (const auto hit = mBvh->intersect(a, b, 0)) return hit->s;
+    return std::nullopt;
+}
+
 FaithfulLevels faithfulLevels(const std::vector<octree::ChordTransmittance>& chords, double tolerance) {
     int coarsest = -1;
     for (std::size_t l = 0; l < chords.size() && coarsest < 0; ++l)

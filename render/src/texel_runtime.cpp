@@ -28,33 +28,73 @@ FaithfulLevels measureFaithfulLevels(const octree::Octree& tree, const octree::C
     return faithfulLevels(chords, tolerance);
 }
 
-// The shadow level per footprint level f below the coarsest faithful level, for fitted levels
-// (TexelRuntime::shadowLevels). The rule without the fit takes the coarsest faithful level,
-// because the unfitted levels coarser than it are too opaque; fitted, they are not, and a dense
-// texel's fine voxels darken the leaves they stand for instead (docs/render.md, "Shadows at the
-// level that lights what is seen"). So, from that level toward f (what the footprint asks), a
-// coarser level is taken where its measured lit fraction (octree::measureLitFractions, camera
-// level f + 1: a shadow's cone is twice its camera ray's) is nearer the mesh's by more than twice
-// the mesh fraction's standard error: closer than that, the measurement cannot tell them apart
-// and the rule without the fit stands. 4096 chords, as the faithful levels are measured with.
-std::vector<int> measuredShadowLevels(const octree::Octree& tree, const SourceBvh& source,
-                                      const octree::ChordVisibility& visible, double tau,
-                                      const std::vector<double>& scales, int coarsest) {
-    if (coarsest <= 0) return {};
-    const octree::ChordFirstHit hit = [&](const Vec3& a, const Vec3& b) -> std::optional<double> {
-        if (const auto h = source.intersect(a, b, 0)) return h->s;
-        return std::nullopt;
-    };
-    const octree::LitFractions lit = octree::measureLitFractions(tree, hit, visible, tau, scales, std::size_t(coarsest), 4096, 1);
-    const double margin = 2 * lit.meshStandardError();
+// What the lit fractions (octree::measureLitFractions, 4096 chords, as the faithful levels are
+// measured with) decide for fitted levels: the shadow levels and the hybrid's mesh level.
+struct MeasuredLighting {
+    std::vector<int> shadowLevels;  ///< TexelRuntime::shadowLevels
+    int meshLevel = 0;              ///< TexelRuntime::meshLevel
+};
+
+// The shadow level per footprint level f below the coarsest faithful level (TexelRuntime::
+// shadowLevels). The rule without the fit takes the coarsest faithful level, because the unfitted
+// levels coarser than it are too opaque; fitted, they are not, and a dense texel's fine voxels
+// darken the leaves they stand for instead (docs/render.md, "Shadows at the level that lights
+// what is seen"). So, from that level toward f (what the footprint asks), a coarser level is taken
+// where its lit fraction (camera level f + 1: a shadow's cone is twice its camera ray's) is
+// nearer the mesh's by more than `margin`: closer than that, the measurement cannot tell them
+// apart and the rule without the fit stands.
+std::vector<int> shadowLevelsFrom(const octree::LitFractions& lit, int coarsest, double margin) {
     std::vector<int> levels;
-    for (std::size_t f = 0; f < std::size_t(coarsest) && f + 1 < lit.volume.size(); ++f) {
+    for (std::size_t f = 0; f < std::size_t(std::max(coarsest, 0)) && f + 1 < lit.volume.size(); ++f) {
         std::size_t best = std::size_t(coarsest);
         for (std::size_t l = best; l-- > f;)
             if (std::abs(lit.error(f + 1, l)) < std::abs(lit.error(f + 1, best)) - margin) best = l;
         levels.push_back(int(best));
     }
     return levels;
+}
+
+// The hybrid's mesh level (docs/render.md, "Mesh where the volume is not faithful"): the finest
+// faithful level, unless the lighting ends the volume sooner. Camera level c, lit through the
+// shadow level its cone takes (shadowLevelFor(c − 1)), is off the mesh's lit fraction by e(c):
+// coarse levels light too much (a voxel spreads a clump's shadow thin), fine ones too little (a
+// voxel shadows the leaves it stands for, the more so the denser the texel: the 20 000-leaf bush's
+// levels 7 and 8, −0.08 and −0.13 of a lit fraction of 0.45, were its near view's −23 %; printed
+// by bench/lit_fractions.cpp). Among the faithful levels, the volume keeps the one lit best, c*,
+// and finer ones while |e| stays within `margin` of |e(c*)|; the mesh takes over from the first
+// that does not.
+int meshLevelFrom(const octree::LitFractions& lit, const std::vector<int>& shadowLevels, const FaithfulLevels& faithful,
+                  double margin) {
+    const auto error = [&](int c) {
+        const int shadow = TexelRuntime::shadowLevelOf(shadowLevels, faithful.coarsest, c - 1);
+        return std::abs(lit.error(std::size_t(c), std::size_t(shadow)));
+    };
+    const int first = std::max(faithful.coarsest, 1), last = std::min(faithful.finest, int(lit.volume.size()) - 1);
+    if (first > last) return faithful.finest;
+    int best = first;
+    for (int c = first + 1; c <= last; ++c)
+        if (error(c) < error(best)) best = c;
+    for (int c = best + 1; c <= last; ++c)
+        if (error(c) > error(best) + margin) return c - 1;
+    return faithful.finest;
+}
+
+MeasuredLighting measureLighting(const octree::Octree& tree, const SourceBvh& source, const octree::ChordVisibility& visible,
+                                 double tau, const std::vector<double>& scales, const FaithfulLevels& faithful) {
+    const octree::ChordFirstHit hit = [&](const Vec3& a, const Vec3& b) -> std::optional<double> {
+        if (const auto h = source.intersect(a, b, 0)) return h->s;
+        return std::nullopt;
+    };
+    // Up to the coarsest faithful level every pair (the shadow levels' choice); finer camera
+    // levels c only with the shadow level they take, c − 1 (meshLevelFrom).
+    const std::size_t coarsest = std::size_t(std::max(faithful.coarsest, 0));
+    const std::size_t finest = std::max(std::size_t(std::max(faithful.finest, 0)), coarsest);
+    const octree::LitPairs wanted = [&](std::size_t c, std::size_t l) { return l <= coarsest || l + 1 == c; };
+    const octree::LitFractions lit = octree::measureLitFractions(tree, hit, visible, tau, scales, finest, 4096, 1, wanted);
+    const double margin = 2 * lit.meshStandardError();
+    MeasuredLighting out{shadowLevelsFrom(lit, faithful.coarsest, margin), faithful.finest};
+    out.meshLevel = meshLevelFrom(lit, out.shadowLevels, faithful, margin);
+    return out;
 }
 
 }  // namespace
@@ -85,13 +125,16 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             // does within 0.003 on other chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
             // With the hybrid on, a level finer than the mesh level's next is never marched.
             const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest + 1) : 30u;
+            int meshLevel = faithful.finest;
             if (options.fitLevels) {
                 for (const octree::ShellChordFit& fit : octree::fitShellChords(*tree, visible, def.tau, kLevelFitChords, 1, finest))
                     t.levelScale.push_back(fit.scale);
-                t.shadowLevels = measuredShadowLevels(*tree, *source, visible, def.tau, t.levelScale, faithful.coarsest);
+                MeasuredLighting lighting = measureLighting(*tree, *source, visible, def.tau, t.levelScale, faithful);
+                t.shadowLevels = std::move(lighting.shadowLevels);
+                meshLevel = lighting.meshLevel;
             }
             if (options.hybrid) {
-                t.meshLevel = faithful.finest;
+                t.meshLevel = meshLevel;
                 t.source = std::move(source);
             } else {
                 t.sourceMesh.reset();

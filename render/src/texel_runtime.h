@@ -33,10 +33,11 @@ struct TexelRuntime {
     int coarsestShadowLevel = 0;
     /// With the levels fitted, the shadow level per footprint level below coarsestShadowLevel:
     /// measured, between the footprint's and coarsestShadowLevel (texel_runtime.cpp,
-    /// measuredShadowLevels). Empty, or a footprint past its end: max(coarsestShadowLevel, footprint).
+    /// shadowLevelsFrom). Empty, or a footprint past its end: max(coarsestShadowLevel, footprint).
     std::vector<int> shadowLevels;
     /// The level a shadow march takes where its cone asks for level `footprint`.
-    int shadowLevelFor(int footprint) const {
+    int shadowLevelFor(int footprint) const { return shadowLevelOf(shadowLevels, coarsestShadowLevel, footprint); }
+    static int shadowLevelOf(const std::vector<int>& shadowLevels, int coarsestShadowLevel, int footprint) {
         if (footprint >= 0 && std::size_t(footprint) < shadowLevels.size()) return shadowLevels[std::size_t(footprint)];
         return std::max(coarsestShadowLevel, footprint);
     }

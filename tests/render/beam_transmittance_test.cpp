@@ -288,3 +288,31 @@ TEST(LitFractions, APoissonMediumIsLitAsItsExponentialVolume) {
     const std::vector<double> dense(4, 2 * kappa / rho);
     EXPECT_LT(vtex::octree::measureLitFractions(*constant, hit, visible, 1, dense, 3, 16384).error(3, 3), -0.05);
 }
+
+// Pairs left out of a lit-fraction measure (its `wanted` argument, which the renderer uses to skip
+// fine shadow levels' walks) are NaN; the others are what the whole measure gives, bit for bit.
+TEST(LitFractions, PairsLeftOutAreNotMeasuredAndTheOthersDoNotChange) {
+    const auto constant = makeOctreeOf(3, 2.0f);
+    const auto hit = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) -> std::optional<double> {
+        const double s = -std::log(segmentHash(a, b)) / (1.3 * (b - a).norm());
+        return s <= 1 ? std::optional<double>(s) : std::nullopt;
+    };
+    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return !hit(a, b); };
+    const std::vector<double> scales(4, 0.65);
+    const auto all = vtex::octree::measureLitFractions(*constant, hit, visible, 1, scales, 3, 1024);
+    const vtex::octree::LitPairs wanted = [](std::size_t c, std::size_t l) { return l <= 1 || l + 1 == c; };
+    const auto some = vtex::octree::measureLitFractions(*constant, hit, visible, 1, scales, 3, 1024, 1, wanted);
+    ASSERT_EQ(some.volume.size(), all.volume.size());
+    EXPECT_EQ(some.mesh, all.mesh);
+    std::size_t measured = 0;
+    for (std::size_t c = 0; c < all.volume.size(); ++c)
+        for (std::size_t l = 0; l < all.volume[c].size(); ++l) {
+            if (std::isnan(all.volume[c][l]) || !wanted(c, l)) {
+                EXPECT_TRUE(std::isnan(some.volume[c][l])) << c << " " << l;
+                continue;
+            }
+            EXPECT_EQ(some.volume[c][l], all.volume[c][l]) << c << " " << l;
+            ++measured;
+        }
+    EXPECT_EQ(measured, 6u);  // camera levels 0 and 1: shadow levels 0–1; 2: 1; 3: 2
+}

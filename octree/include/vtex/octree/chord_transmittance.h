@@ -122,7 +122,9 @@ using ChordFirstHit = std::function<std::optional<double>(const Vec3& a, const V
 /// shadow level l (densities × scales[l]), each chord weighted by its opacity 1 − T. Measured for
 /// camera and shadow levels up to finestShadowLevel, all below scales.size() and the tree's levels,
 /// shadow levels from c − 1 (a shadow's cone is never narrower than its camera ray's; NaN
-/// elsewhere). A pure function of `seed`, whatever the thread count.
+/// elsewhere), and of those only the pairs (c, l) `wanted` says (all when empty; NaN for the
+/// others: a fine shadow level's walks are most of the cost). A pure function of `seed`, whatever
+/// the thread count.
 struct LitFractions {
     double mesh = 1;                          ///< fraction of the mesh's seen points that are lit
     std::size_t seen = 0;                     ///< chords whose first surface the mesh shows
@@ -131,9 +133,10 @@ struct LitFractions {
     /// The binomial standard error of `mesh` (0.5/√seen at most), the noise every error shares.
     double meshStandardError() const { return seen > 0 ? std::sqrt(mesh * (1 - mesh) / double(seen)) : 0; }
 };
+using LitPairs = std::function<bool(std::size_t camera, std::size_t shadow)>;
 LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, const ChordVisibility& visible,
                                  double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
-                                 int chords, std::uint64_t seed = 1);
+                                 int chords, std::uint64_t seed = 1, const LitPairs& wanted = {});
 
 /// Visits the non-empty voxels of `level` that the segment a → b (inside the unit cube) crosses,
 /// front to back, as visit(node that stands for the voxel, t0, t1) with [t0, t1] the distances

@@ -11,6 +11,7 @@
 #include <vtex/render/geometry.h>
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace vtex::render {
@@ -29,6 +30,9 @@ public:
 
     /// Whether no source triangle lies on the reference-space segment a → b. Thread-safe.
     bool visible(const Vec3& a, const Vec3& b) const;
+    /// Where the segment a → b first meets a source triangle, as a fraction of its length; none
+    /// when it misses (octree::ChordFirstHit). Thread-safe.
+    std::optional<double> firstHit(const Vec3& a, const Vec3& b) const;
 
 private:
     std::unique_ptr<detail::SourceBvh> mBvh;
