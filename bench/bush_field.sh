@@ -13,7 +13,8 @@
 # (`vtex reference` at TRUTH_SPP, near TRUTH_SPP_NEAR), its time against the two references',
 # and the issue's goals for the defaults as PASS/FAIL.
 # Optional: DENSE=1 also times far and mid with a 20 000-leaf bush sampled at 256³ (goal:
-# dense / sparse ≤ 1.15), with their RMSE and bias against their own truths (TRUTH_SPP); SWEEP=1 renders defaults and the 1-spp reference at 12 distances,
+# dense / sparse ≤ 1.15), and near (no goal; beside the dense mesh's 1-spp reference), with their
+# RMSE and bias against their own truths (TRUTH_SPP, near TRUTH_SPP_NEAR); SWEEP=1 renders defaults and the 1-spp reference at 12 distances,
 # geometric from near to far, against truths at SWEEP_TRUTH_SPP (64): mean green and RMSE.
 # Truths are cached in DIR/truth/, keyed by scene file, spp, source mesh and TRUTH_KEY ("v1";
 # change it when the reference renderer changes); a reused truth is announced.
@@ -81,6 +82,7 @@ truth near "$TRUTH_SPP_NEAR"
 if [ "$DENSE" = 1 ]; then
   truth far_dense "$TRUTH_SPP" bush_dense.glb
   truth mid_dense "$TRUTH_SPP" bush_dense.glb
+  truth near_dense "$TRUTH_SPP_NEAR" bush_dense.glb
 fi
 if [ "$SWEEP" = 1 ]; then
   while read -r view _; do truth "$view" "$SWEEP_TRUTH_SPP"; done < sweep.txt
