@@ -31,14 +31,28 @@ Scene denseBushField(const SourcedTexel& bush, double distance) {
     return scene;
 }
 
-// The leaves' light of the texel render (`spp` samples) against the reference's (64 spp), as
-// the green channel's relative bias.
-double leavesBias(const Scene& scene, const RenderResult& texelRender) {
+// The dense bush (8 000 leaves at 64³: a fine voxel holds several overlapping leaves), built once.
+const SourcedTexel& denseBush() {
+    static const SourcedTexel bush = makeBush(8000, 64);
+    return bush;
+}
+
+// The texel render at 4 spp and its leaves' light against the reference's (64 spp), as the green
+// channel's relative bias.
+struct LeavesRender {
+    RenderResult render;
+    double bias = 0;
+};
+LeavesRender renderLeaves(const Scene& scene) {
+    RenderOptions options;
+    options.spp = 4;
+    LeavesRender out{renderQuiet(scene, options), 0.0};
     ReferenceOptions referenceOptions;
     referenceOptions.spp = 64;
     vtex::NullProgress progress;
     const Image reference = renderReference(scene, referenceOptions, progress).image;
-    return imageMean(texelRender.image)[1] / imageMean(reference)[1] - 1;
+    out.bias = imageMean(out.render.image)[1] / imageMean(reference)[1] - 1;
+    return out;
 }
 
 // A 4×4 field of a dense bush (8 000 leaves at 64³: a fine voxel holds several overlapping
@@ -49,12 +63,7 @@ double leavesBias(const Scene& scene, const RenderResult& texelRender) {
 // measured shadow levels (5 5 4 4 4 for footprint levels 0–4; the camera's mean level is 4.2)
 // light the leaves within 10 % (measured −2.1 %).
 TEST(ShadowLevels, ADenseBushIsLitAsItsMeshWhenItsShadowsAreMeasured) {
-    const SourcedTexel bush = makeBush(8000, 64);
-    const Scene scene = denseBushField(bush, 14);
-    RenderOptions options;
-    options.spp = 4;
-    const RenderResult texelRender = renderQuiet(scene, options);
-    const double bias = leavesBias(scene, texelRender);
+    const auto [texelRender, bias] = renderLeaves(denseBushField(denseBush(), 14));
     ASSERT_EQ(texelRender.stats.shadowLevels.size(), 1u);
     const std::vector<int>& levels = texelRender.stats.shadowLevels[0];
     std::cout << "leaves' light " << bias * 100 << " % (mean level " << texelRender.stats.meanLevel() << ", shadow levels";
@@ -78,16 +87,12 @@ TEST(ShadowLevels, ADenseBushIsLitAsItsMeshWhenItsShadowsAreMeasured) {
 // 3 % of the reference's (4 spp against 64; measured −0.1 %), where the mesh level 6 of the chords
 // alone gives −10.2 % (measured by forcing it in a throw-away build).
 TEST(ShadowLevels, TheMeshTakesOverWhereAFinerLevelLightsTheLeavesTooLittle) {
-    const SourcedTexel bush = makeBush(8000, 64);
+    const SourcedTexel& bush = denseBush();
     const SourceVisibility visibility(*bush.mesh, bush.tree->info.source);
-    const FaithfulLevels faithful = faithfulLevels(
-        octree::measureChordTransmittance(*bush.tree, [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return visibility.visible(a, b); }),
-        RenderOptions{}.hybridTolerance);
-    const Scene scene = denseBushField(bush, 4);
-    RenderOptions options;
-    options.spp = 4;
-    const RenderResult texelRender = renderQuiet(scene, options);
-    const double bias = leavesBias(scene, texelRender);
+    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return visibility.visible(a, b); };
+    const FaithfulLevels faithful =
+        faithfulLevels(octree::measureChordTransmittance(*bush.tree, visible), RenderOptions{}.hybridTolerance);
+    const auto [texelRender, bias] = renderLeaves(denseBushField(bush, 4));
     ASSERT_EQ(texelRender.stats.meshLevels.size(), 1u);
     std::cout << "near: leaves' light " << bias * 100 << " % (mean level " << texelRender.stats.meanLevel()
               << ", mesh level " << texelRender.stats.meshLevels[0] << ", faithful levels " << faithful.coarsest << "–"
