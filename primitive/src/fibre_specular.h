@@ -233,14 +233,23 @@ inline Eigen::Matrix3d adjugate(const Eigen::Matrix3d& s) {
     return adj;
 }
 
-/// ∫ D_v(N)(N·l)⁺ (n+2)/2π cosⁿα dN for the SGGX matrix `s`, adj = adjugate(s), a needle thin
-/// enough against the Phong lobe for the limit of an ideal fibre: one that takesFibreLimit admits
-/// at fibreEigenRatioGate(n) (the caller tests the gate, with the invariants it has). `power` says
-/// how cosⁿα is raised (n = its shininess); `cosCutoff` is the cos α below which cosⁿα counts as 0.
-inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& adj, const Eigen::Vector3d& l,
-                             const Eigen::Vector3d& v, double cosCutoff, const FibrePower& power) {
+/// The circle of normals of a needle and the rules along it, as needleSpecular (and bandSpecular,
+/// band_specular.h) integrate along it.
+struct FibreFrame {
+    Eigen::Vector3d t, a, b;  ///< the axis, and the frame (a, b) of the cross-section: a along v⊥
+    double lt, vt;            ///< l·t and v·t
+    FibreIntegrand f;
+    FibreRule lobe, flat;  ///< flat only where `flatSide`
+    bool flatSide;         ///< the cross-section is flat (axis ratio below kFlatSection)
+};
+
+/// The frame and rules of needleSpecular for the SGGX matrix `s`, adj = adjugate(s), at shininess
+/// n = power.shininess: false where no normal of the circle faces both l and v, or where the
+/// fibre's highlight cone misses v by more than `cosCutoff` (then every term is below 1e-6 of
+/// the lobe's peak).
+inline bool fibreFrame(const Eigen::Matrix3d& s, const Eigen::Matrix3d& adj, const Eigen::Vector3d& l,
+                       const Eigen::Vector3d& v, double cosCutoff, double shininess, FibreFrame& out) {
     using Eigen::Vector3d;
-    const double shininess = power.shininess;
     // The axis: adj S ≈ λ₂λ₃ t tᵀ, so its longest column (chosen by index, without a branch:
     // which it is does not follow a pattern).
     const Vector3d norms = adj.colwise().squaredNorm();
@@ -254,7 +263,7 @@ inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& ad
     // Below the kernel's Phong cut-off every term is under 1e-6 of the lobe's peak and the
     // whole factor under 1e-6 · (n+2)/2π (∫D_v = 1, N·l ≤ 1): the bound the lattice drops too.
     const double peak = lPerp * vPerp - lt * vt;
-    if (!(peak > cosCutoff) || !(lPerp > 1e-12) || !(vPerp > 1e-12)) return 0.0;
+    if (!(peak > cosCutoff) || !(lPerp > 1e-12) || !(vPerp > 1e-12)) return false;
     // The frame (a, b) of the cross-section: a along v⊥, so that v = (|v⊥|, 0).
     const Vector3d a = (v - t * vt) / vPerp, b = t.cross(a), sa = s * a, sb = s * b;
     FibreIntegrand f{a.dot(sa), b.dot(sb), a.dot(sb), 0, vPerp, 0, l.dot(a), l.dot(b), l.dot(v), 0};
@@ -267,9 +276,9 @@ inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& ad
     const double inversePerp = 1 / (lPerp * vPerp);
     const double lhx = (f.lv - lt * vt) * inversePerp, lhy = l.dot(t.cross(v)) * inversePerp;
     const double bx = 1 + lhx, by = lhy, bisector = std::sqrt(bx * bx + by * by);
-    if (!(bisector > 1e-9)) return 0.0;  // l⊥ opposite v⊥: no normal faces both
+    if (!(bisector > 1e-9)) return false;  // l⊥ opposite v⊥: no normal faces both
     const double sinH = 0.5 * bisector, cosH = 0.5 * std::sqrt((1 - lhx) * (1 - lhx) + lhy * lhy);
-    FibreRule lobe;
+    FibreRule& lobe = out.lobe;
     lobe.cx = bx / bisector;
     lobe.cy = by / bisector;
     // Near its peak cosⁿα ≈ cosⁿα* exp(−2n|l⊥||v⊥|Δφ²/cos α*): the lobe's width along φ.
@@ -277,13 +286,20 @@ inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& ad
     lobe.gamma = 0.5 * kLobeSpread * std::clamp(sigma, 1e-6, 1.0);
     lobe.s1 = atanRightHalf(sinH, lobe.gamma * (1 + cosH));
     lobe.s0 = -lobe.s1;
+    out.t = t;
+    out.a = a;
+    out.b = b;
+    out.lt = lt;
+    out.vt = vt;
+    out.f = f;
     // The flattest side: S₂'s eigenvector of the larger eigenvalue, on the arc's side.
     const double meanS = 0.5 * (f.saa + f.sbb), spreadS = std::sqrt(0.25 * (f.saa - f.sbb) * (f.saa - f.sbb) + f.sab * f.sab);
     const double ratio = std::sqrt(std::max(meanS - spreadS, 0.0) / std::max(meanS + spreadS, 1e-300));
     // A round cross-section's ρ is nearly flat: the lobe's rule alone resolves the integrand,
     // and a second rule's share of it (the power heuristic's partition) only adds error.
-    if (!(ratio < kFlatSection)) return fibreRuleSum(lobe, nullptr, f, power) * (shininess + 2) / (2 * std::numbers::pi);
-    FibreRule flat;
+    out.flatSide = ratio < kFlatSection;
+    if (!out.flatSide) return true;
+    FibreRule& flat = out.flat;
     const double larger = meanS + spreadS;  // (S₂ − λ₊)e = 0: of its two solutions, the longer
     double ex = f.sab, ey = larger - f.saa;
     if (ex * ex + ey * ey < (larger - f.sbb) * (larger - f.sbb) + f.sab * f.sab) ex = larger - f.sbb, ey = f.sab;
@@ -294,8 +310,21 @@ inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& ad
     // The arc's ends: c rotated by ∓H.
     flat.s0 = flat.sOf(lobe.cx * cosH + lobe.cy * sinH, lobe.cy * cosH - lobe.cx * sinH);
     flat.s1 = flat.sOf(lobe.cx * cosH - lobe.cy * sinH, lobe.cy * cosH + lobe.cx * sinH);
-    double total = fibreRuleSum(lobe, &flat, f, power);
-    if (flat.s1 > flat.s0) total += fibreRuleSum(flat, &lobe, f, power);
+    return true;
+}
+
+/// ∫ D_v(N)(N·l)⁺ (n+2)/2π cosⁿα dN for the SGGX matrix `s`, adj = adjugate(s), a needle thin
+/// enough against the Phong lobe for the limit of an ideal fibre: one that takesFibreLimit admits
+/// at fibreEigenRatioGate(n) (the caller tests the gate, with the invariants it has). `power` says
+/// how cosⁿα is raised (n = its shininess); `cosCutoff` is the cos α below which cosⁿα counts as 0.
+inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& adj, const Eigen::Vector3d& l,
+                             const Eigen::Vector3d& v, double cosCutoff, const FibrePower& power) {
+    const double shininess = power.shininess;
+    FibreFrame frame;
+    if (!fibreFrame(s, adj, l, v, cosCutoff, shininess, frame)) return 0.0;
+    if (!frame.flatSide) return fibreRuleSum(frame.lobe, nullptr, frame.f, power) * (shininess + 2) / (2 * std::numbers::pi);
+    double total = fibreRuleSum(frame.lobe, &frame.flat, frame.f, power);
+    if (frame.flat.s1 > frame.flat.s0) total += fibreRuleSum(frame.flat, &frame.lobe, frame.f, power);
     return total * (shininess + 2) / (2 * std::numbers::pi);
 }
 
