@@ -108,6 +108,21 @@ struct FibrePower {
 };
 
 #if defined(__SSE2__)
+/// sin s and cos s on four lanes, s in [−π/2, π/2]: Taylor to s¹¹ and s¹², truncation below 6e-8.
+/// Horner, not Estrin's scheme: near s = ±π/2, where cos s is small and a narrow lobe's nodes
+/// sit, Estrin's larger partial sums rounded in single precision moved vtex_specular_estimators'
+/// shininess-1000 random row (0.019 → 0.020).
+inline void sinCosLanes(__m128 s, __m128& sn, __m128& cs) {
+    const auto poly = [](__m128 x2, std::initializer_list<float> c) {  // Horner in x², highest first
+        __m128 r = _mm_set1_ps(*c.begin());
+        for (auto it = c.begin() + 1; it != c.end(); ++it) r = _mm_add_ps(_mm_mul_ps(r, x2), _mm_set1_ps(*it));
+        return r;
+    };
+    const __m128 x2 = _mm_mul_ps(s, s);
+    sn = _mm_mul_ps(s, poly(x2, {-1.f / 39916800, 1.f / 362880, -1.f / 5040, 1.f / 120, -1.f / 6, 1}));
+    cs = poly(x2, {1.f / 479001600, -1.f / 3628800, 1.f / 40320, -1.f / 720, 1.f / 24, -0.5f, 1});
+}
+
 /// cⁿ on four lanes; without a whole n, libm's pow only on the lanes set in `mask` (0 elsewhere).
 inline __m128 powerLanes(__m128 c, __m128 mask, const FibrePower& power) {
     if (power.whole >= 0) {
@@ -130,14 +145,6 @@ inline __m128 powerLanes(__m128 c, __m128 mask, const FibrePower& power) {
 /// l or v or α ≥ 90°.
 inline double fibreRuleSum(const FibreRule& rule, const FibreRule* other, const FibreIntegrand& f, const FibrePower& power) {
     const auto set = [](double x) { return _mm_set1_ps(float(x)); };
-    // Horner, not Estrin's scheme: near s = ±π/2, where cos s is small and a narrow lobe's nodes
-    // sit, Estrin's larger partial sums rounded in single precision moved vtex_specular_estimators'
-    // shininess-1000 random row (0.019 → 0.020).
-    const auto poly = [](__m128 x2, std::initializer_list<float> c) {  // Horner in x², highest first
-        __m128 r = _mm_set1_ps(*c.begin());
-        for (auto it = c.begin() + 1; it != c.end(); ++it) r = _mm_add_ps(_mm_mul_ps(r, x2), _mm_set1_ps(*it));
-        return r;
-    };
     const __m128 mid = set(0.5 * (rule.s0 + rule.s1)), half = set(0.5 * (rule.s1 - rule.s0)), g = set(rule.gamma);
     const __m128 cx = set(rule.cx), cy = set(rule.cy), vx = set(f.vx), lx = set(f.lx), ly = set(f.ly), lv = set(f.lv);
     const __m128 saa = set(f.saa), sbb = set(f.sbb), sab2 = set(2 * f.sab), det = set(f.det);
@@ -150,10 +157,8 @@ inline double fibreRuleSum(const FibreRule& rule, const FibreRule* other, const 
     const __m128 oScale = set(other ? 1 / (other->s1 - other->s0) : 0);
     __m128 sum = zero;
     for (std::size_t k = 0; k < kFibreNodes; k += 4) {
-        const __m128 s = _mm_add_ps(mid, _mm_mul_ps(half, _mm_loadu_ps(&kFibreNodeS[k]))), x2 = _mm_mul_ps(s, s);
-        // sin and cos on [−π/2, π/2]: Taylor to s¹¹ and s¹², truncation below 6e-8.
-        const __m128 sn = _mm_mul_ps(s, poly(x2, {-1.f / 39916800, 1.f / 362880, -1.f / 5040, 1.f / 120, -1.f / 6, 1}));
-        const __m128 cs = poly(x2, {1.f / 479001600, -1.f / 3628800, 1.f / 40320, -1.f / 720, 1.f / 24, -0.5f, 1});
+        __m128 sn, cs;
+        sinCosLanes(_mm_add_ps(mid, _mm_mul_ps(half, _mm_loadu_ps(&kFibreNodeS[k]))), sn, cs);
         const __m128 gs = _mm_mul_ps(g, sn), c2 = _mm_mul_ps(cs, cs), g2 = _mm_mul_ps(gs, gs);
         const __m128 norm = _mm_add_ps(c2, g2), d = _mm_div_ps(one, norm);
         const __m128 cosD = _mm_mul_ps(_mm_sub_ps(c2, g2), d), sinD = _mm_mul_ps(_mm_mul_ps(two, _mm_mul_ps(gs, cs)), d);
@@ -238,6 +243,7 @@ inline Eigen::Matrix3d adjugate(const Eigen::Matrix3d& s) {
 struct FibreFrame {
     Eigen::Vector3d t, a, b;  ///< the axis, and the frame (a, b) of the cross-section: a along v⊥
     double lt, vt;            ///< l·t and v·t
+    double sinH, cosH;        ///< the arc where N faces l and v: c ± H, c the lobe rule's centre
     FibreIntegrand f;
     FibreRule lobe, flat;  ///< flat only where `flatSide`
     bool flatSide;         ///< the cross-section is flat (axis ratio below kFlatSection)
@@ -291,6 +297,8 @@ inline bool fibreFrame(const Eigen::Matrix3d& s, const Eigen::Matrix3d& adj, con
     out.b = b;
     out.lt = lt;
     out.vt = vt;
+    out.sinH = sinH;
+    out.cosH = cosH;
     out.f = f;
     // The flattest side: S₂'s eigenvector of the larger eigenvalue, on the arc's side.
     const double meanS = 0.5 * (f.saa + f.sbb), spreadS = std::sqrt(0.25 * (f.saa - f.sbb) * (f.saa - f.sbb) + f.sab * f.sab);

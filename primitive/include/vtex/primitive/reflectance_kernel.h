@@ -84,6 +84,7 @@ private:
     /// |det C| (N·l) cosⁿα / (w |C u|³), w the point's height on the disc's hemisphere.
     double mLobeRatio = 0;
     double mFibreGate = 0;  ///< the largest λ₁/λ₂ the fibre limit takes (src/fibre_specular.h)
+    double mBandGate = 0;   ///< the largest λ₁/λ₂ the band rule takes (src/band_specular.h); 0: none
     /// Strategy B's half vectors in (wk, wj, wi) and their (N·l) cosⁿα; 0 for those facing
     /// away from v, whose normal is then v.
     alignas(16) std::array<float, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe

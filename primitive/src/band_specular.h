@@ -1,0 +1,218 @@
+// The specular factor of a needle too thick for the fibre limit against a narrow Phong lobe
+// (reflectance_kernel.h). Its normals fill a band around the great circle orthogonal to its axis
+// t, and the lobe crosses the band on a patch whose width across the band is comparable to the
+// band's own: the fibre limit (fibre_specular.h) takes the band as a line, the D_v lattice has
+// a few points in it, the lobe's 8 points a few in the band, and the product of the two is what
+// the integral needs (a needle of axis ratios 0.10 and 0.21 of the bush's voxels at shininess
+// 1000: the lattice and lobe 51 % off). Here the integral is a product rule over exact
+// coordinates of the sphere around t: N = (u(φ) + τ t)/√(1+τ²), u(φ) on the circle, τ = tan of
+// the latitude, dN = dφ dτ/(1+τ²)^{3/2}.
+//
+// Along φ, the fibre limit's rules (fibreFrame: the wrapped-Cauchy rule on the lobe's peak, and
+// on the flattest side of a flat cross-section, by the power heuristic). Across, at each node
+// of those, two rules in τ by the power heuristic, each τ = c + w tan ψ with ψ Gauss–Legendre on
+// [−atan 3, atan 3]:
+//   - the band's: SGGX's D (Heitz et al. 2015, eq. 9) over τ at fixed φ is, exactly,
+//     ∝ (1+τ²)²/P(τ)² with P(τ) = (u + τt)ᵀ adj S (u + τt) = tᵀadj S t ((τ − τ₀)² + κ²), a
+//     squared Cauchy profile: c = τ₀, w = κ make it cos²ψ, which Gauss–Legendre integrates well;
+//   - the lobe's: around the half vector h, 1 − cos α ≈ 2(C²|δ|² + (δ·l)²) for a small offset δ
+//     of N (C = h·l), a Gaussian of width 1/(2√(n(C² + (e·l)²))) across (e the direction of
+//     increasing τ at h), whose centre moves across with the offset along (the lobe's tilt to
+//     the band); c and w are those, w widened by kAcrossSpread as the fibre's lobe rule is.
+// Each evaluates the exact integrand D_v(N)(N·l)(n+2)/2π cosⁿα, so the rule converges to the
+// integral with its nodes: 8 along (16 on a flat cross-section) × 12 across resolve needles up to
+// a thickness of 4 lobe widths at shininess 50–1000 to a few per cent (bench/vtex_specular_estimators,
+// ReflectanceKernel.BandRuleHoldsAcrossItsWindow), beyond which the lattice and lobe do as well.
+#pragma once
+
+#include "fibre_specular.h"
+
+
+#include <Eigen/Dense>
+
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace vtex::primitive::detail {
+
+/// The band rule's window: needles past the fibre gate up to a thickness (axis ratio √(λ₁/λ₂)
+/// times √(n+1), the ratio in units of the lobe's width) of kBandThickest, from shininess
+/// kBandShininess. Below it the lattice and lobe meet the row-16 goal (the estimator table's rows
+/// at 1 and 10), and the scene default (20) keeps their cost; beyond a thickness of 4 they do as
+/// well as this rule (a throw-away scan of needles against a converged rule, docs/micro-primitive.md).
+inline constexpr double kBandShininess = 50;
+inline constexpr double kBandThickest = 4;
+/// The largest λ₁/λ₂ the band rule takes at shininess n: 0 (none) below kBandShininess.
+inline double bandEigenRatioGate(double n) { return n < kBandShininess ? 0.0 : kBandThickest * kBandThickest / (n + 1); }
+
+/// The lobe's rule across is wider than its Gaussian, as the fibre's along it (kLobeSpread).
+inline constexpr double kAcrossSpread = 1.4;
+/// Each rule across reaches ψ = ±atan 3, |τ − c| ≤ 3w: the rest of a squared Cauchy profile holds
+/// under 1 % of it, and the other rule covers the lobe's side.
+inline constexpr float kAcrossReach = 3;
+/// tan ψ and the weights (Gauss–Legendre weight × atan 3 × (1 + tan²ψ), dτ = w × this) of the
+/// 6-node rule on ψ ∈ [−atan 3, atan 3], twice: lanes 0–5 the band's rule, 6–11 the lobe's.
+alignas(16) inline constexpr std::array<float, 12> kAcrossTan{
+    -2.325573937f, -1.084429298f, -0.307196877f, 0.307196877f, 1.084429298f, 2.325573937f,
+    -2.325573937f, -1.084429298f, -0.307196877f, 0.307196877f, 1.084429298f, 2.325573937f};
+alignas(16) inline constexpr std::array<float, 12> kAcrossWeight{
+    1.371324531f, 0.980516491f, 0.639600037f, 0.639600037f, 0.980516491f, 1.371324531f,
+    1.371324531f, 0.980516491f, 0.639600037f, 0.639600037f, 0.980516491f, 1.371324531f};
+
+/// What the rules across need, in the frame (a, b, t) of fibreFrame.
+struct BandAcross {
+    double aaa, aab, abb, aat, abt, att;  ///< adj S in (a, b, t)
+    double vx, vt, lx, ly, lt, lv;        ///< v = (vx, 0, vt), l = (lx, ly, lt), l·v
+    double lobeTau, lobeWidth, lobeTilt;  ///< the lobe's centre τ_h + tilt · sin Δφ and width across
+    double hx, hy;                        ///< the direction of h on the circle (Δφ from it)
+};
+
+/// The nodes of `rule` along the circle: their direction (x, y) in (a, b), and their weight
+/// dφ/ds × Gauss–Legendre weight × half the arc in s, times the power heuristic's weight against
+/// `other` (as in fibreRuleSum).
+inline void fibreNodes(const FibreRule& rule, const FibreRule* other, float* xs, float* ys, float* ws) {
+    const double mid = 0.5 * (rule.s0 + rule.s1), half = 0.5 * (rule.s1 - rule.s0);
+    for (std::size_t k = 0; k < kFibreNodes; ++k) {
+        const double s = mid + half * kFibreNodeS[k], sn = std::sin(s), cs = std::cos(s);
+        const double gs = rule.gamma * sn, norm = cs * cs + gs * gs, d = 1 / norm;
+        const double cosD = (cs * cs - gs * gs) * d, sinD = 2 * gs * cs * d;
+        const double x = rule.cx * cosD - rule.cy * sinD, y = rule.cy * cosD + rule.cx * sinD;
+        double weight = half * kFibreWeights[k] * 2 * rule.gamma * d;
+        if (other) {
+            const double own = rule.density(float(x), float(y)), them = other->density(float(x), float(y));
+            weight *= own * own / std::max(own * own + them * them, 1e-30);
+        }
+        xs[k] = float(x);
+        ys[k] = float(y);
+        ws[k] = float(weight);
+    }
+}
+
+/// Σ over the 12 nodes across the band at the node u = (x, y) of the circle of
+/// (m·v)(m·l) cosⁿα / (P'² √(1+τ²)) dτ × the power heuristic's weight, m = u + τt and
+/// P' = (τ − τ₀)² + κ² = P(τ)/tᵀadj S t: the integrand per dφ dτ up to bandSpecular's constant.
+inline double bandAcrossSum(const BandAcross& b, double x, double y, const FibrePower& power) {
+    const double uv = x * b.vx, ul = x * b.lx + y * b.ly;
+    const double uAu = x * x * b.aaa + 2 * x * y * b.aab + y * y * b.abb, uAt = x * b.aat + y * b.abt;
+    const double tau0 = -uAt / b.att, kappa2 = std::max(uAu * b.att - uAt * uAt, 1e-300) / (b.att * b.att);
+    const double lobeTau = b.lobeTau + b.lobeTilt * (b.hx * y - b.hy * x);
+    const double centre[2] = {tau0, lobeTau}, width[2] = {std::sqrt(kappa2), b.lobeWidth};
+    double sum = 0;
+#if defined(__SSE2__)
+    const auto set = [](double v) { return _mm_set1_ps(float(v)); };
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1), two = _mm_set1_ps(2), reach = _mm_set1_ps(kAcrossReach);
+    const __m128 absMask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 uvV = set(uv), ulV = set(ul), vtV = set(b.vt), ltV = set(b.lt), lvV = set(b.lv);
+    const __m128 tau0V = set(tau0), kappa2V = set(kappa2);
+    __m128 total = zero;
+    for (std::size_t k = 0; k < 12; k += 4) {
+        // Lane j belongs to the band's rule (j < 6) or the lobe's: its own centre and width, and the other's.
+        const auto pick = [&](const double* v, bool other) {
+            const auto at = [&](std::size_t j) { return float(v[(j < 6) == other ? 1 : 0]); };
+            return _mm_set_ps(at(k + 3), at(k + 2), at(k + 1), at(k));
+        };
+        const __m128 c = pick(centre, false), w = pick(width, false), co = pick(centre, true), wo = pick(width, true);
+        const __m128 t = _mm_load_ps(&kAcrossTan[k]);
+        const __m128 tau = _mm_add_ps(c, _mm_mul_ps(w, t)), dTau = _mm_mul_ps(w, _mm_load_ps(&kAcrossWeight[k]));
+        const __m128 db = _mm_sub_ps(tau, tau0V), p = _mm_add_ps(_mm_mul_ps(db, db), kappa2V);
+        const __m128 mv = _mm_add_ps(uvV, _mm_mul_ps(tau, vtV)), ml = _mm_add_ps(ulV, _mm_mul_ps(tau, ltV));
+        const __m128 g = _mm_add_ps(one, _mm_mul_ps(tau, tau));
+        const __m128 cosA = _mm_sub_ps(_mm_div_ps(_mm_mul_ps(two, _mm_mul_ps(ml, mv)), g), lvV);
+        const __m128 lit = _mm_and_ps(_mm_and_ps(_mm_cmpgt_ps(mv, zero), _mm_cmpgt_ps(ml, zero)), _mm_cmpgt_ps(cosA, zero));
+        // The power heuristic: the rules' densities over τ are w/(w² + d²) within their reach, so
+        // other/own = wo w (1 + tan²ψ)/(wo² + do²) and own²/(own² + other²) = q²/(q² + r²).
+        const __m128 dO = _mm_sub_ps(tau, co), q = _mm_add_ps(_mm_mul_ps(wo, wo), _mm_mul_ps(dO, dO));
+        const __m128 inside = _mm_cmple_ps(_mm_and_ps(dO, absMask), _mm_mul_ps(reach, wo));
+        const __m128 r = _mm_and_ps(inside, _mm_mul_ps(_mm_mul_ps(wo, w), _mm_add_ps(one, _mm_mul_ps(t, t))));
+        const __m128 q2 = _mm_mul_ps(q, q), weight = _mm_div_ps(q2, _mm_add_ps(q2, _mm_mul_ps(r, r)));
+        const __m128 value = _mm_div_ps(_mm_mul_ps(_mm_mul_ps(mv, ml), _mm_mul_ps(dTau, weight)),
+                                        _mm_mul_ps(_mm_mul_ps(p, p), _mm_sqrt_ps(g)));
+        total = _mm_add_ps(total, _mm_and_ps(lit, _mm_mul_ps(value, powerLanes(_mm_and_ps(lit, cosA), lit, power))));
+    }
+    alignas(16) float parts[4];
+    _mm_store_ps(parts, total);
+    sum = double(parts[0]) + double(parts[1]) + double(parts[2]) + double(parts[3]);
+#else
+    for (std::size_t j = 0; j < 12; ++j) {
+        const std::size_t own = j < 6 ? 0 : 1, other = 1 - own;
+        const double t = kAcrossTan[j], tau = centre[own] + width[own] * t, dTau = width[own] * kAcrossWeight[j];
+        const double db = tau - tau0, p = db * db + kappa2, mv = uv + tau * b.vt, ml = ul + tau * b.lt, g = 1 + tau * tau;
+        const double cosA = 2 * ml * mv / g - b.lv;
+        if (!(mv > 0 && ml > 0 && cosA > 0)) continue;
+        const double dO = tau - centre[other], q = width[other] * width[other] + dO * dO;
+        const double r = std::abs(dO) <= kAcrossReach * width[other] ? width[other] * width[own] * (1 + t * t) : 0;
+        const double cn = power.whole >= 0 ? std::pow(cosA, power.whole) : std::pow(cosA, power.shininess);
+        sum += mv * ml * dTau * q * q / (q * q + r * r) / (p * p * std::sqrt(g)) * cn;
+    }
+#endif
+    return sum;
+}
+
+/// ∫ D_v(N)(N·l)⁺ (n+2)/2π cosⁿα dN for the SGGX matrix `s`, adj = adjugate(s), a needle that
+/// bandEigenRatioGate(n) admits (the caller tests the gate, with the invariants it has), by the
+/// product rule above. `power` says how cosⁿα is raised (n = its shininess). Not inlined: the
+/// kernel's evaluation is flattened into its clones (reflectance_kernel.cpp), and this rare,
+/// long path would crowd the registers of the common one.
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+inline double bandSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& adj, const Eigen::Vector3d& l,
+                           const Eigen::Vector3d& v, const FibrePower& power) {
+    using Eigen::Vector3d;
+    const double n = power.shininess;
+    FibreFrame frame;
+    // No cut-off on the circle's highlight cone: normals off the circle may still meet the lobe.
+    if (!fibreFrame(s, adj, l, v, -2, n, frame)) return 0.0;
+    const Vector3d& a = frame.a;
+    const Vector3d& b = frame.b;
+    const Vector3d& t = frame.t;
+    const Vector3d adjA = adj * a, adjB = adj * b, adjT = adj * t;
+    BandAcross across{a.dot(adjA), a.dot(adjB), b.dot(adjB), a.dot(adjT), b.dot(adjT), t.dot(adjT),
+                      frame.f.vx, frame.vt, frame.f.lx, frame.f.ly, frame.lt, frame.f.lv, 0, 0, 0, 0, 0};
+    // The lobe across the band, around h = (l + v)/|l + v| (module comment).
+    const Vector3d h(frame.f.lx + frame.f.vx, frame.f.ly, frame.lt + frame.vt);
+    if (!(h.squaredNorm() > 1e-18)) return 0.0;  // l = −v: no mirror direction
+    const Vector3d hn = h.normalized();
+    const double hPerp = std::max(std::hypot(hn.x(), hn.y()), 1e-6), secant2 = 1 + (hn.z() / hPerp) * (hn.z() / hPerp);
+    const double C = std::sqrt(0.5 * (1 + frame.f.lv));
+    const double lTau = (frame.lt - hn.z() * C) / hPerp, lPhi = (hn.x() * frame.f.ly - hn.y() * frame.f.lx) / hPerp;
+    const double curvature = std::max(C * C + lTau * lTau, 1e-6);
+    across.lobeTau = hn.z() / hPerp;
+    across.lobeWidth = kAcrossSpread * secant2 / (2 * std::sqrt(std::max(n, 1.0) * curvature));
+    across.lobeTilt = -lTau * lPhi / curvature * hPerp * secant2;
+    across.hx = hn.x() / hPerp;
+    across.hy = hn.y() / hPerp;
+    // Along: the lobe rule on h's direction on the circle, ĥ⊥ (not the bisector of l̂⊥ and v̂⊥,
+    // where cos α peaks on the circle itself), with the larger of the fibre's width and the lobe's
+    // width along φ at h, 1/(2√(n(C² + (e_φ·l)²))) over |h⊥|: off the circle the lobe is wider in
+    // φ, and where it lies far from the circle (near the needle's tip) the integrand is there,
+    // in D's tail, and not on the circle's peak.
+    const double sigmaH = 1 / (2 * std::sqrt(std::max(n, 1.0) * std::max(C * C + lPhi * lPhi, 1e-6))) / hPerp;
+    FibreRule onH = frame.lobe;
+    onH.gamma = std::max(onH.gamma, 0.5 * kLobeSpread * std::min(sigmaH, 1.0));
+    onH.cx = across.hx;
+    onH.cy = across.hy;
+    // The arc's ends: the bisector rotated by ∓H (ĥ⊥ lies on the arc but off its middle).
+    const double bx = frame.lobe.cx, by = frame.lobe.cy, sinH = frame.sinH, cosH = frame.cosH;
+    onH.s0 = onH.sOf(bx * cosH + by * sinH, by * cosH - bx * sinH);
+    onH.s1 = onH.sOf(bx * cosH - by * sinH, by * cosH + bx * sinH);
+    if (onH.s1 > onH.s0) frame.lobe = onH;
+    // Along: the fibre's rules' nodes.
+    alignas(16) float xs[2 * kFibreNodes], ys[2 * kFibreNodes], ws[2 * kFibreNodes];
+    const bool flat = frame.flatSide && frame.flat.s1 > frame.flat.s0;
+    fibreNodes(frame.lobe, flat ? &frame.flat : nullptr, xs, ys, ws);
+    if (flat) fibreNodes(frame.flat, &frame.lobe, xs + kFibreNodes, ys + kFibreNodes, ws + kFibreNodes);
+    double total = 0;
+    for (std::size_t k = 0; k < (flat ? 2 : 1) * kFibreNodes; ++k) total += ws[k] * bandAcrossSum(across, xs[k], ys[k], power);
+    // D_v (N·l)(n+2)/2π dN/(dφ dτ) = det^{3/2} / (π A(v) (tᵀadj t)²) × the sum's terms × (n+2)/2π.
+    const double det = std::max(s.determinant(), 1e-300), area = std::sqrt(std::max(v.dot(s * v), 1e-300));
+    return total * det * std::sqrt(det) / (std::numbers::pi * area * across.att * across.att) * (n + 2) /
+           (2 * std::numbers::pi);
+}
+
+}  // namespace vtex::primitive::detail
