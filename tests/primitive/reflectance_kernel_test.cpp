@@ -11,9 +11,11 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 using namespace vtex::primitive;
 
@@ -267,4 +269,83 @@ TEST(ReflectanceKernel, FibreLimitHoldsUpToItsGate) {
         std::cout << "needle " << ratio << ", shininess " << shininesses[i] << ": " << error << "\n";
         EXPECT_LE(error, bounds[i]) << "needle " << ratio << ", shininess " << shininesses[i];
     }
+}
+
+namespace {
+
+struct SpecularErrors {
+    double mean;  ///< mean |fast − paper| / mean paper
+    double p95;   ///< 95th percentile of |fast − paper| / mean paper
+};
+
+// The specular factor's errors against the paper's integration (96 cells per axis) on `count`
+// ellipsoids R diag(σ²) Rᵀ, σ = sigma() per case, each lit at a highlight: v random, l its mirror
+// about a normal N ∝ S^{1/2}u (u random; the map concentrates N where the ellipsoid's normals
+// are, on a needle's band), so that the lobe's peak lies on the normals and the specular factor
+// is large. (With l and v both random, the lobe misses a needle's band in most cases.)
+template <class Sigma>
+SpecularErrors aimedSpecularErrors(Sigma sigma, double shininess, int count, std::mt19937& rng) {
+    std::normal_distribution<double> n;
+    std::vector<double> fast, paper;
+    for (int k = 0; k < count; ++k) {
+        const Eigen::Matrix3d r = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+        const Eigen::Vector3d axes = sigma();
+        const SggxMatrix m = toSggx(r * axes.cwiseAbs2().asDiagonal() * r.transpose());
+        const Eigen::Vector3d normal = (r * axes.asDiagonal() * r.transpose() * randomDirection(rng)).normalized();
+        Eigen::Vector3d v = randomDirection(rng);
+        if (v.dot(normal) < 0) v = -v;
+        const Eigen::Vector3d l = 2 * normal.dot(v) * normal - v;
+        fast.push_back(reflectanceFast(m, l, v, shininess).specular);
+        paper.push_back(reflectanceReference(m, l, v, shininess, 96).specular);
+    }
+    double scale = 0;
+    for (const double p : paper) scale += p / count;
+    std::vector<double> errors;
+    double mean = 0;
+    for (std::size_t k = 0; k < fast.size(); ++k) {
+        errors.push_back(std::abs(fast[k] - paper[k]) / scale);
+        mean += errors.back() / count;
+    }
+    std::sort(errors.begin(), errors.end());
+    return {mean, errors[std::size_t(0.95 * (count - 1))]};
+}
+
+}  // namespace
+
+// Issue 15, row 16: the bush's voxels at shininess 1000 were 0.156 off (bench/vtex_specular_estimators),
+// the error carried by one needle of axis ratios 0.10 (its thickness against its cross-section)
+// and 0.21 (its cross-section's), 3.3 lobe widths thick: past the fibre limit's gate, where the
+// lattice and lobe missed the product of its band of normals and the narrow lobe. The band rule
+// (src/band_specular.h) takes it. Lit at its highlights, against the paper's integration (within
+// 0.2 % of a converged band rule and of Monte Carlo there): the lattice and lobe measured 0.069
+// mean and 0.232 at the 95th percentile, the band rule 0.022 and 0.072; bounds: the row's goal.
+TEST(ReflectanceKernel, BandRuleAgreesWithThePapersIntegration) {
+    std::mt19937 rng(41);
+    const SpecularErrors e = aimedSpecularErrors([] { return Eigen::Vector3d(0.10 * 0.21, 0.21, 1); }, 1000, 60, rng);
+    std::cout << "needle 0.10 / 0.21, shininess 1000: mean " << e.mean << ", 95th percentile " << e.p95 << "\n";
+    EXPECT_LE(e.mean, 0.05);
+    EXPECT_LE(e.p95, 0.15);
+}
+
+// The band rule across its window: needles 1, 2 and 3.5 lobe widths thick (axis ratio × √(n+1)),
+// their cross-sections' axis ratios log-uniform in [0.03, 1], lit at their highlights, at
+// shininess 100, 300 and 1000, against the paper's integration. The lattice and lobe measured
+// up to 0.080 mean (thickness 1 at 1000) and 0.342 at the 95th percentile (2 at 1000), over the
+// goal at 300 and 1000; the band rule at most 0.015 and 0.084 (2 at 1000); bounds: the row's goal.
+TEST(ReflectanceKernel, BandRuleHoldsAcrossItsWindow) {
+    std::mt19937 rng(43);
+    std::uniform_real_distribution<double> logCross(-1.5, 0);
+    for (const double shininess : {100.0, 300.0, 1000.0})
+        for (const double thickness : {1.0, 2.0, 3.5}) {
+            const double ratio = thickness / std::sqrt(shininess + 1);
+            const auto sigma = [&] {
+                const double cross = std::pow(10.0, logCross(rng));
+                return Eigen::Vector3d(ratio * cross, cross, 1);
+            };
+            const SpecularErrors e = aimedSpecularErrors(sigma, shininess, 60, rng);
+            std::cout << "needle " << thickness << " lobe widths, shininess " << shininess << ": mean " << e.mean
+                      << ", 95th percentile " << e.p95 << "\n";
+            EXPECT_LE(e.mean, 0.05) << thickness << " lobe widths, shininess " << shininess;
+            EXPECT_LE(e.p95, 0.15) << thickness << " lobe widths, shininess " << shininess;
+        }
 }
