@@ -20,9 +20,10 @@
 //     increasing τ at h), whose centre moves across with the offset along (the lobe's tilt to
 //     the band); c and w are those, w widened by kAcrossSpread as the fibre's lobe rule is.
 // Each evaluates the exact integrand D_v(N)(N·l)(n+2)/2π cosⁿα, so the rule converges to the
-// integral with its nodes: 8 along (16 on a flat cross-section) × 12 across resolve needles up to
-// a thickness of 4 lobe widths at shininess 50–1000 to a few per cent (bench/vtex_specular_estimators,
-// ReflectanceKernel.BandRuleHoldsAcrossItsWindow), beyond which the lattice and lobe do as well.
+// integral with its nodes: 8 along (16 on a flat cross-section) × 12 across resolve needles from
+// 0.15 to 4 lobe widths thick at shininess 50–1000 to a few per cent (bench/vtex_specular_estimators,
+// ReflectanceKernel.BandRule*), below which the fibre limit does as well, and beyond which the
+// lattice and lobe do.
 #pragma once
 
 #include "fibre_specular.h"
@@ -30,6 +31,7 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -49,6 +51,21 @@ inline constexpr double kBandShininess = 50;
 inline constexpr double kBandThickest = 4;
 /// The largest λ₁/λ₂ the band rule takes at shininess n: 0 (none) below kBandShininess.
 inline double bandEigenRatioGate(double n) { return n < kBandShininess ? 0.0 : kBandThickest * kBandThickest / (n + 1); }
+/// From kBandShininess the band rule also takes needles between a thickness of kBandThinnest and
+/// the fibre gate (0.105 (n+1)^0.3: 0.42 at 100, 0.83 at 1000): there the fibre limit, which has
+/// no normals off its circle, misses where the lobe meets the band's tails off the circle. On
+/// round needles under random l and v (a throw-away scan against the paper's integration at 128
+/// cells, docs/micro-primitive.md) it was 0.04–0.07 off at a thickness of 0.2 and 0.12–0.21 at
+/// 0.4 (shininess 50–1000), the band rule within 0.03 from 0.1; lit at their highlights both
+/// are within 0.025. At 0.15 the fibre limit keeps the needles of
+/// ReflectanceKernel.FibreLimitAgreesWithThePapersIntegration (axis ratio 0.01 at shininess 100).
+inline constexpr double kBandThinnest = 0.15;
+/// The largest λ₁/λ₂ the kernel's fibre limit takes at shininess n: fibreEigenRatioGate(n), from
+/// kBandShininess at most kBandThinnest²/(n+1).
+inline double kernelFibreEigenRatioGate(double n) {
+    const double gate = fibreEigenRatioGate(n);
+    return n < kBandShininess ? gate : std::min(gate, kBandThinnest * kBandThinnest / (n + 1));
+}
 
 /// The lobe's rule across is wider than its Gaussian, as the fibre's along it (kLobeSpread).
 inline constexpr double kAcrossSpread = 1.4;

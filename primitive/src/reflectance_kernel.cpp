@@ -50,7 +50,7 @@ struct LobeLattice {
     double shininess = -1;
     /// r = (sin α cos φ, sin α sin φ, cos α) and cosⁿα, in single precision for setUpLobe's 4-wide loop
     alignas(16) std::array<float, kCount> x{}, y{}, z{}, cosPower{};
-    double fibreGate = 0;  ///< detail::fibreEigenRatioGate(n): a pow, so kept with the lobe's points
+    double fibreGate = 0;  ///< detail::kernelFibreEigenRatioGate(n): a pow, so kept with the lobe's points
     double bandGate = 0;   ///< detail::bandEigenRatioGate(n)
     static const LobeLattice& forShininess(double n) {
         thread_local LobeLattice cached;
@@ -65,7 +65,7 @@ struct LobeLattice {
                 cached.z[k] = float(cosAlpha);
                 cached.cosPower[k] = float(std::pow(xi, n / (n + 1)));  // cosⁿα
             }
-            cached.fibreGate = detail::fibreEigenRatioGate(n);
+            cached.fibreGate = detail::kernelFibreEigenRatioGate(n);
             cached.bandGate = detail::bandEigenRatioGate(n);
             cached.shininess = n;
         }
