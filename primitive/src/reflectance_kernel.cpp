@@ -107,6 +107,9 @@ struct ReflectanceKernel::Clones {
     static void setUp(ReflectanceKernel& k, const Vector3d& wk, const Vector3d& wj, const Vector3d& wi);
     static void setUpLobe(ReflectanceKernel& k);
     static ReflectanceFactors evaluate(const ReflectanceKernel& k, const SggxMatrix& s);
+    /// detail::bandSpecular in the kernel's frame: a call of its own (not flattened into
+    /// evaluate, whose common path it would crowd), in its own clones.
+    static double band(const ReflectanceKernel& k, const Eigen::Matrix3d& s);
 };
 
 ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const { return Clones::evaluate(*this, s); }
@@ -325,8 +328,7 @@ inline ReflectanceFactors ReflectanceKernel::evaluate(const SggxMatrix& s) const
         fibre = detail::needleSpecular(s3, detail::adjugate(s3), mLight.cast<double>(), Vector3d(0, 0, 1), mCosCutoff,
                                        {mWholePower, mShininess});
     } else if (mSpecular && mBandGate > 0 && detail::takesFibreLimit(trace, trAdj, det, mBandGate)) {
-        const Eigen::Matrix3d s3 = sFrame();
-        fibre = detail::bandSpecular(s3, detail::adjugate(s3), mLight.cast<double>(), Vector3d(0, 0, 1), {mWholePower, mShininess});
+        fibre = Clones::band(*this, sFrame());
     }
     const bool mis = mSpecular && !fibre && mLobeCount > 0 && detC > 0;
     const double lobeRatio = mis ? mLobeRatio * detC / (scale * scale * scale) : 0;
@@ -426,6 +428,17 @@ VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUp(ReflectanceKernel& k, c
 VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUpLobe(ReflectanceKernel& k) { k.setUpLobe(); }
 VTEX_KERNEL_CLONES ReflectanceFactors ReflectanceKernel::Clones::evaluate(const ReflectanceKernel& k, const SggxMatrix& s) {
     return k.evaluate(s);
+}
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+VTEX_KERNEL_CLONES double ReflectanceKernel::Clones::band(const ReflectanceKernel& k, const Eigen::Matrix3d& s) {
+    // The cut-off pow(1e-6, 1/n) = e^{−x}, x = ln(10⁶)/n, unclamped (mCosCutoff clamps n to 64: the
+    // band rule's many nodes gain from the tighter one): 1 − x + x²/2 − x³/6 ≤ e^{−x}, within
+    // 3e-4 of it from n = 50; a lower cut-off only keeps more terms.
+    const double x = 13.815510557964274 / k.mShininess, cutoff = 1 - x * (1 - x / 2 * (1 - x / 3));
+    return detail::bandSpecular(s, detail::adjugate(s), k.mLight.cast<double>(), Vector3d(0, 0, 1), cutoff,
+                                {k.mWholePower, k.mShininess});
 }
 #undef VTEX_KERNEL_CLONES
 
