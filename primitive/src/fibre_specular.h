@@ -108,6 +108,21 @@ struct FibrePower {
 };
 
 #if defined(__SSE2__)
+/// sin s and cos s on four lanes, s in [−π/2, π/2]: Taylor to s¹¹ and s¹², truncation below 6e-8.
+/// Horner, not Estrin's scheme: near s = ±π/2, where cos s is small and a narrow lobe's nodes
+/// sit, Estrin's larger partial sums rounded in single precision moved vtex_specular_estimators'
+/// shininess-1000 random row (0.019 → 0.020).
+inline void sinCosLanes(__m128 s, __m128& sn, __m128& cs) {
+    const auto poly = [](__m128 x2, std::initializer_list<float> c) {  // Horner in x², highest first
+        __m128 r = _mm_set1_ps(*c.begin());
+        for (auto it = c.begin() + 1; it != c.end(); ++it) r = _mm_add_ps(_mm_mul_ps(r, x2), _mm_set1_ps(*it));
+        return r;
+    };
+    const __m128 x2 = _mm_mul_ps(s, s);
+    sn = _mm_mul_ps(s, poly(x2, {-1.f / 39916800, 1.f / 362880, -1.f / 5040, 1.f / 120, -1.f / 6, 1}));
+    cs = poly(x2, {1.f / 479001600, -1.f / 3628800, 1.f / 40320, -1.f / 720, 1.f / 24, -0.5f, 1});
+}
+
 /// cⁿ on four lanes; without a whole n, libm's pow only on the lanes set in `mask` (0 elsewhere).
 inline __m128 powerLanes(__m128 c, __m128 mask, const FibrePower& power) {
     if (power.whole >= 0) {
@@ -130,14 +145,6 @@ inline __m128 powerLanes(__m128 c, __m128 mask, const FibrePower& power) {
 /// l or v or α ≥ 90°.
 inline double fibreRuleSum(const FibreRule& rule, const FibreRule* other, const FibreIntegrand& f, const FibrePower& power) {
     const auto set = [](double x) { return _mm_set1_ps(float(x)); };
-    // Horner, not Estrin's scheme: near s = ±π/2, where cos s is small and a narrow lobe's nodes
-    // sit, Estrin's larger partial sums rounded in single precision moved vtex_specular_estimators'
-    // shininess-1000 random row (0.019 → 0.020).
-    const auto poly = [](__m128 x2, std::initializer_list<float> c) {  // Horner in x², highest first
-        __m128 r = _mm_set1_ps(*c.begin());
-        for (auto it = c.begin() + 1; it != c.end(); ++it) r = _mm_add_ps(_mm_mul_ps(r, x2), _mm_set1_ps(*it));
-        return r;
-    };
     const __m128 mid = set(0.5 * (rule.s0 + rule.s1)), half = set(0.5 * (rule.s1 - rule.s0)), g = set(rule.gamma);
     const __m128 cx = set(rule.cx), cy = set(rule.cy), vx = set(f.vx), lx = set(f.lx), ly = set(f.ly), lv = set(f.lv);
     const __m128 saa = set(f.saa), sbb = set(f.sbb), sab2 = set(2 * f.sab), det = set(f.det);
@@ -150,10 +157,8 @@ inline double fibreRuleSum(const FibreRule& rule, const FibreRule* other, const 
     const __m128 oScale = set(other ? 1 / (other->s1 - other->s0) : 0);
     __m128 sum = zero;
     for (std::size_t k = 0; k < kFibreNodes; k += 4) {
-        const __m128 s = _mm_add_ps(mid, _mm_mul_ps(half, _mm_loadu_ps(&kFibreNodeS[k]))), x2 = _mm_mul_ps(s, s);
-        // sin and cos on [−π/2, π/2]: Taylor to s¹¹ and s¹², truncation below 6e-8.
-        const __m128 sn = _mm_mul_ps(s, poly(x2, {-1.f / 39916800, 1.f / 362880, -1.f / 5040, 1.f / 120, -1.f / 6, 1}));
-        const __m128 cs = poly(x2, {1.f / 479001600, -1.f / 3628800, 1.f / 40320, -1.f / 720, 1.f / 24, -0.5f, 1});
+        __m128 sn, cs;
+        sinCosLanes(_mm_add_ps(mid, _mm_mul_ps(half, _mm_loadu_ps(&kFibreNodeS[k]))), sn, cs);
         const __m128 gs = _mm_mul_ps(g, sn), c2 = _mm_mul_ps(cs, cs), g2 = _mm_mul_ps(gs, gs);
         const __m128 norm = _mm_add_ps(c2, g2), d = _mm_div_ps(one, norm);
         const __m128 cosD = _mm_mul_ps(_mm_sub_ps(c2, g2), d), sinD = _mm_mul_ps(_mm_mul_ps(two, _mm_mul_ps(gs, cs)), d);
@@ -233,14 +238,24 @@ inline Eigen::Matrix3d adjugate(const Eigen::Matrix3d& s) {
     return adj;
 }
 
-/// ∫ D_v(N)(N·l)⁺ (n+2)/2π cosⁿα dN for the SGGX matrix `s`, adj = adjugate(s), a needle thin
-/// enough against the Phong lobe for the limit of an ideal fibre: one that takesFibreLimit admits
-/// at fibreEigenRatioGate(n) (the caller tests the gate, with the invariants it has). `power` says
-/// how cosⁿα is raised (n = its shininess); `cosCutoff` is the cos α below which cosⁿα counts as 0.
-inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& adj, const Eigen::Vector3d& l,
-                             const Eigen::Vector3d& v, double cosCutoff, const FibrePower& power) {
+/// The circle of normals of a needle and the rules along it, as needleSpecular (and bandSpecular,
+/// band_specular.h) integrate along it.
+struct FibreFrame {
+    Eigen::Vector3d t, a, b;  ///< the axis, and the frame (a, b) of the cross-section: a along v⊥
+    double lt, vt;            ///< l·t and v·t
+    double sinH, cosH;        ///< the arc where N faces l and v: c ± H, c the lobe rule's centre
+    FibreIntegrand f;
+    FibreRule lobe, flat;  ///< flat only where `flatSide`
+    bool flatSide;         ///< the cross-section is flat (axis ratio below kFlatSection)
+};
+
+/// The frame and rules of needleSpecular for the SGGX matrix `s`, adj = adjugate(s), at shininess
+/// n = power.shininess: false where no normal of the circle faces both l and v, or where the
+/// fibre's highlight cone misses v by more than `cosCutoff` (then every term is below 1e-6 of
+/// the lobe's peak).
+inline bool fibreFrame(const Eigen::Matrix3d& s, const Eigen::Matrix3d& adj, const Eigen::Vector3d& l,
+                       const Eigen::Vector3d& v, double cosCutoff, double shininess, FibreFrame& out) {
     using Eigen::Vector3d;
-    const double shininess = power.shininess;
     // The axis: adj S ≈ λ₂λ₃ t tᵀ, so its longest column (chosen by index, without a branch:
     // which it is does not follow a pattern).
     const Vector3d norms = adj.colwise().squaredNorm();
@@ -254,7 +269,7 @@ inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& ad
     // Below the kernel's Phong cut-off every term is under 1e-6 of the lobe's peak and the
     // whole factor under 1e-6 · (n+2)/2π (∫D_v = 1, N·l ≤ 1): the bound the lattice drops too.
     const double peak = lPerp * vPerp - lt * vt;
-    if (!(peak > cosCutoff) || !(lPerp > 1e-12) || !(vPerp > 1e-12)) return 0.0;
+    if (!(peak > cosCutoff) || !(lPerp > 1e-12) || !(vPerp > 1e-12)) return false;
     // The frame (a, b) of the cross-section: a along v⊥, so that v = (|v⊥|, 0).
     const Vector3d a = (v - t * vt) / vPerp, b = t.cross(a), sa = s * a, sb = s * b;
     FibreIntegrand f{a.dot(sa), b.dot(sb), a.dot(sb), 0, vPerp, 0, l.dot(a), l.dot(b), l.dot(v), 0};
@@ -267,9 +282,9 @@ inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& ad
     const double inversePerp = 1 / (lPerp * vPerp);
     const double lhx = (f.lv - lt * vt) * inversePerp, lhy = l.dot(t.cross(v)) * inversePerp;
     const double bx = 1 + lhx, by = lhy, bisector = std::sqrt(bx * bx + by * by);
-    if (!(bisector > 1e-9)) return 0.0;  // l⊥ opposite v⊥: no normal faces both
+    if (!(bisector > 1e-9)) return false;  // l⊥ opposite v⊥: no normal faces both
     const double sinH = 0.5 * bisector, cosH = 0.5 * std::sqrt((1 - lhx) * (1 - lhx) + lhy * lhy);
-    FibreRule lobe;
+    FibreRule& lobe = out.lobe;
     lobe.cx = bx / bisector;
     lobe.cy = by / bisector;
     // Near its peak cosⁿα ≈ cosⁿα* exp(−2n|l⊥||v⊥|Δφ²/cos α*): the lobe's width along φ.
@@ -277,13 +292,22 @@ inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& ad
     lobe.gamma = 0.5 * kLobeSpread * std::clamp(sigma, 1e-6, 1.0);
     lobe.s1 = atanRightHalf(sinH, lobe.gamma * (1 + cosH));
     lobe.s0 = -lobe.s1;
+    out.t = t;
+    out.a = a;
+    out.b = b;
+    out.lt = lt;
+    out.vt = vt;
+    out.sinH = sinH;
+    out.cosH = cosH;
+    out.f = f;
     // The flattest side: S₂'s eigenvector of the larger eigenvalue, on the arc's side.
     const double meanS = 0.5 * (f.saa + f.sbb), spreadS = std::sqrt(0.25 * (f.saa - f.sbb) * (f.saa - f.sbb) + f.sab * f.sab);
     const double ratio = std::sqrt(std::max(meanS - spreadS, 0.0) / std::max(meanS + spreadS, 1e-300));
     // A round cross-section's ρ is nearly flat: the lobe's rule alone resolves the integrand,
     // and a second rule's share of it (the power heuristic's partition) only adds error.
-    if (!(ratio < kFlatSection)) return fibreRuleSum(lobe, nullptr, f, power) * (shininess + 2) / (2 * std::numbers::pi);
-    FibreRule flat;
+    out.flatSide = ratio < kFlatSection;
+    if (!out.flatSide) return true;
+    FibreRule& flat = out.flat;
     const double larger = meanS + spreadS;  // (S₂ − λ₊)e = 0: of its two solutions, the longer
     double ex = f.sab, ey = larger - f.saa;
     if (ex * ex + ey * ey < (larger - f.sbb) * (larger - f.sbb) + f.sab * f.sab) ex = larger - f.sbb, ey = f.sab;
@@ -294,8 +318,21 @@ inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& ad
     // The arc's ends: c rotated by ∓H.
     flat.s0 = flat.sOf(lobe.cx * cosH + lobe.cy * sinH, lobe.cy * cosH - lobe.cx * sinH);
     flat.s1 = flat.sOf(lobe.cx * cosH - lobe.cy * sinH, lobe.cy * cosH + lobe.cx * sinH);
-    double total = fibreRuleSum(lobe, &flat, f, power);
-    if (flat.s1 > flat.s0) total += fibreRuleSum(flat, &lobe, f, power);
+    return true;
+}
+
+/// ∫ D_v(N)(N·l)⁺ (n+2)/2π cosⁿα dN for the SGGX matrix `s`, adj = adjugate(s), a needle thin
+/// enough against the Phong lobe for the limit of an ideal fibre: one that takesFibreLimit admits
+/// at fibreEigenRatioGate(n) (the caller tests the gate, with the invariants it has). `power` says
+/// how cosⁿα is raised (n = its shininess); `cosCutoff` is the cos α below which cosⁿα counts as 0.
+inline double needleSpecular(const Eigen::Matrix3d& s, const Eigen::Matrix3d& adj, const Eigen::Vector3d& l,
+                             const Eigen::Vector3d& v, double cosCutoff, const FibrePower& power) {
+    const double shininess = power.shininess;
+    FibreFrame frame;
+    if (!fibreFrame(s, adj, l, v, cosCutoff, shininess, frame)) return 0.0;
+    if (!frame.flatSide) return fibreRuleSum(frame.lobe, nullptr, frame.f, power) * (shininess + 2) / (2 * std::numbers::pi);
+    double total = fibreRuleSum(frame.lobe, &frame.flat, frame.f, power);
+    if (frame.flat.s1 > frame.flat.s0) total += fibreRuleSum(frame.flat, &frame.lobe, frame.f, power);
     return total * (shininess + 2) / (2 * std::numbers::pi);
 }
 

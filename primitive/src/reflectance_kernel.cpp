@@ -2,6 +2,7 @@
 // distribution through the closed-form sampler of Heitz et al. 2015 (Listing 3) on a fixed lattice.
 #include <vtex/primitive/reflectance_kernel.h>
 
+#include "band_specular.h"
 #include "fibre_specular.h"
 
 #include <algorithm>
@@ -49,7 +50,8 @@ struct LobeLattice {
     double shininess = -1;
     /// r = (sin α cos φ, sin α sin φ, cos α) and cosⁿα, in single precision for setUpLobe's 4-wide loop
     alignas(16) std::array<float, kCount> x{}, y{}, z{}, cosPower{};
-    double fibreGate = 0;  ///< detail::fibreEigenRatioGate(n): a pow, so kept with the lobe's points
+    double fibreGate = 0;  ///< detail::kernelFibreEigenRatioGate(n): a pow, so kept with the lobe's points
+    double bandGate = 0;   ///< detail::bandEigenRatioGate(n)
     static const LobeLattice& forShininess(double n) {
         thread_local LobeLattice cached;
         if (cached.shininess != n) {
@@ -63,7 +65,8 @@ struct LobeLattice {
                 cached.z[k] = float(cosAlpha);
                 cached.cosPower[k] = float(std::pow(xi, n / (n + 1)));  // cosⁿα
             }
-            cached.fibreGate = detail::fibreEigenRatioGate(n);
+            cached.fibreGate = detail::kernelFibreEigenRatioGate(n);
+            cached.bandGate = detail::bandEigenRatioGate(n);
             cached.shininess = n;
         }
         return cached;
@@ -104,6 +107,9 @@ struct ReflectanceKernel::Clones {
     static void setUp(ReflectanceKernel& k, const Vector3d& wk, const Vector3d& wj, const Vector3d& wi);
     static void setUpLobe(ReflectanceKernel& k);
     static ReflectanceFactors evaluate(const ReflectanceKernel& k, const SggxMatrix& s);
+    /// detail::bandSpecular in the kernel's frame: a call of its own (not flattened into
+    /// evaluate, whose common path it would crowd), in its own clones.
+    static double band(const ReflectanceKernel& k, const Eigen::Matrix3d& s);
 };
 
 ReflectanceFactors ReflectanceKernel::operator()(const SggxMatrix& s) const { return Clones::evaluate(*this, s); }
@@ -227,6 +233,7 @@ inline void ReflectanceKernel::setUpLobe() {
 #endif
     mLobeRatio = double(kLobeSamples) / mLattice->n * 2 * (mShininess + 1);
     mFibreGate = lobe.fibreGate;
+    mBandGate = lobe.bandGate;
 }
 
 // Strategy B's sum: each half vector's pre-image q = C⁻¹N (back substitution), at which A's
@@ -310,14 +317,18 @@ inline ReflectanceFactors ReflectanceKernel::evaluate(const SggxMatrix& s) const
     const double scale = Mi.z();  // = √Sii: folded into the float terms to keep them O(1)
     std::optional<double> fibre;
     // A needle much thinner than the lobe: neither strategy finds the short arc where the lobe
-    // crosses its circle of normals; the fibre limit integrates along that circle. The gate is
-    // tested first with the invariants above (adj S's diagonal: rawBlockDet and two more minors).
-    if (mSpecular && detail::takesFibreLimit(Skk + Sjj + Sii, rawBlockDet + (Skk * Sii - Ski * Ski) + (Skk * Sjj - Skj * Skj),
-                                             det, mFibreGate)) {
-        Eigen::Matrix3d sFrame;
-        sFrame << Skk, Skj, Ski, Skj, Sjj, Sji, Ski, Sji, Sii;
-        fibre = detail::needleSpecular(sFrame, detail::adjugate(sFrame), mLight.cast<double>(), Vector3d(0, 0, 1), mCosCutoff,
+    // crosses its circle of normals; the fibre limit integrates along that circle. A thicker one
+    // against a narrow lobe (from kBandShininess): the band rule integrates over the band of its
+    // normals (src/band_specular.h). The gates are tested first with the invariants above (adj S's
+    // diagonal: rawBlockDet and two more minors); the band's only where it has a window.
+    const double trace = Skk + Sjj + Sii, trAdj = rawBlockDet + (Skk * Sii - Ski * Ski) + (Skk * Sjj - Skj * Skj);
+    const auto sFrame = [&] { return (Eigen::Matrix3d() << Skk, Skj, Ski, Skj, Sjj, Sji, Ski, Sji, Sii).finished(); };
+    if (mSpecular && detail::takesFibreLimit(trace, trAdj, det, mFibreGate)) {
+        const Eigen::Matrix3d s3 = sFrame();
+        fibre = detail::needleSpecular(s3, detail::adjugate(s3), mLight.cast<double>(), Vector3d(0, 0, 1), mCosCutoff,
                                        {mWholePower, mShininess});
+    } else if (mSpecular && mBandGate > 0 && detail::takesFibreLimit(trace, trAdj, det, mBandGate)) {
+        fibre = Clones::band(*this, sFrame());
     }
     const bool mis = mSpecular && !fibre && mLobeCount > 0 && detC > 0;
     const double lobeRatio = mis ? mLobeRatio * detC / (scale * scale * scale) : 0;
@@ -417,6 +428,17 @@ VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUp(ReflectanceKernel& k, c
 VTEX_KERNEL_CLONES void ReflectanceKernel::Clones::setUpLobe(ReflectanceKernel& k) { k.setUpLobe(); }
 VTEX_KERNEL_CLONES ReflectanceFactors ReflectanceKernel::Clones::evaluate(const ReflectanceKernel& k, const SggxMatrix& s) {
     return k.evaluate(s);
+}
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+VTEX_KERNEL_CLONES double ReflectanceKernel::Clones::band(const ReflectanceKernel& k, const Eigen::Matrix3d& s) {
+    // The cut-off pow(1e-6, 1/n) = e^{−x}, x = ln(10⁶)/n, unclamped (mCosCutoff clamps n to 64: the
+    // band rule's many nodes gain from the tighter one): 1 − x + x²/2 − x³/6 ≤ e^{−x}, within
+    // 3e-4 of it from n = 50; a lower cut-off only keeps more terms.
+    const double x = 13.815510557964274 / k.mShininess, cutoff = 1 - x * (1 - x / 2 * (1 - x / 3));
+    return detail::bandSpecular(s, detail::adjugate(s), k.mLight.cast<double>(), Vector3d(0, 0, 1), cutoff,
+                                {k.mWholePower, k.mShininess});
 }
 #undef VTEX_KERNEL_CLONES
 

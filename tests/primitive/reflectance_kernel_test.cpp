@@ -3,6 +3,7 @@
 // against the paper's integration (reflectanceReference).
 #include <vtex/primitive/reflectance_kernel.h>
 
+#include "../../primitive/src/band_specular.h"
 #include "../../primitive/src/fibre_specular.h"
 
 #include <gtest/gtest.h>
@@ -10,9 +11,11 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 using namespace vtex::primitive;
 
@@ -108,7 +111,7 @@ SggxMatrix toSggx(const Eigen::Matrix3d& s) { return {s(0, 0), s(1, 1), s(2, 2),
 
 // The kernel's fibre gate as an axis ratio (src/fibre_specular.h): needles thinner than
 // 0.105 (n+1)^0.3 times the lobe's width 1/√(n+1) take the fibre limit.
-double fibreGateRatio(double shininess) { return std::sqrt(vtex::primitive::detail::fibreEigenRatioGate(shininess)); }
+double fibreGateRatio(double shininess) { return std::sqrt(vtex::primitive::detail::kernelFibreEigenRatioGate(shininess)); }
 
 }  // namespace
 
@@ -133,7 +136,13 @@ TEST(ReflectanceKernel, EqualsThePlainMethodOnNeedlesAndDiscs) {
                 // FibreLimitAgreesWithThePapersIntegration): kept out with a factor 4 of margin
                 // on the kernel's gate, whose eigenvalue estimates are close there.
                 const Eigen::Vector3d lambda = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(s).eigenvalues();
-                if (lambda(0) / lambda(1) < 4 * std::pow(fibreGateRatio(shininess), 2)) {
+                // So do thicker needles from shininess 50, the band rule's (src/band_specular.h,
+                // BandRuleAgreesWithThePapersIntegration): its gate is tested on S's invariants as
+                // the kernel tests it, with 1 % of margin for their rounding.
+                const bool band = vtex::primitive::detail::takesFibreLimit(
+                    s.trace(), vtex::primitive::detail::adjugate(s).trace(), s.determinant(),
+                    1.01 * vtex::primitive::detail::bandEigenRatioGate(shininess));
+                if (band || lambda(0) / lambda(1) < 4 * std::pow(fibreGateRatio(shininess), 2)) {
                     EXPECT_NEAR(got.diffuse, want.diffuse, 1e-5 * (want.diffuse + 1e-3 / kPi));
                     continue;
                 }
@@ -186,7 +195,8 @@ namespace {
 // Mean |fast − paper| / mean paper of the specular factor over `count` random rotations and
 // light/view pairs of the ellipsoid with σ = `sigma` (a random σ per case if sigma is zero:
 // ratios 1 to 1e-3), the paper's integration at 96 cells per axis as the truth.
-double specularErrorAgainstThePaper(const Eigen::Vector3d& sigma, double shininess, int count, std::mt19937& rng) {
+double specularErrorAgainstThePaper(const Eigen::Vector3d& sigma, double shininess, int count, std::mt19937& rng,
+                                    int cells = 96) {
     std::normal_distribution<double> n;
     std::uniform_real_distribution<double> logRatio(-3, 0);
     double error = 0, scale = 0;
@@ -196,7 +206,7 @@ double specularErrorAgainstThePaper(const Eigen::Vector3d& sigma, double shinine
             sigma.isZero() ? Eigen::Vector3d(std::pow(10.0, logRatio(rng)), std::pow(10.0, logRatio(rng)), 1) : sigma;
         const SggxMatrix m = toSggx(r * axes.cwiseAbs2().asDiagonal() * r.transpose());
         const Eigen::Vector3d l = randomDirection(rng), v = randomDirection(rng);
-        const double paper = reflectanceReference(m, l, v, shininess, 96).specular;
+        const double paper = reflectanceReference(m, l, v, shininess, cells).specular;
         error += std::abs(reflectanceFast(m, l, v, shininess).specular - paper);
         scale += paper;
     }
@@ -248,16 +258,114 @@ TEST(ReflectanceKernel, FibreLimitAgreesWithThePapersIntegration) {
 
 // The gate itself: needles just inside it (axis ratio 0.95 × the gate), the thickest the fibre
 // limit takes, against the paper's integration. The gate sits where the fibre limit's error and
-// the lattice-and-lobe estimator's cross (src/fibre_specular.h), so both are worst here; measured
-// 0.038, 0.039, 0.165 at shininess 1, 10, 100: bounds those × 1.3, rounded up. Between this gate
-// and round shapes no strategy reaches 5 % at high shininess: a third one is what is missing.
+// the lattice-and-lobe estimator's cross (src/fibre_specular.h), so both are worst here; from
+// shininess 50 the band rule takes over at a thickness of 0.15 (src/band_specular.h), below the
+// fibre's own gate. Measured 0.038, 0.039, 0.031 at shininess 1, 10, 100 (0.165 at 100 with the
+// fibre's own gate, 0.40 thick): bounds those × 1.3, rounded up.
 TEST(ReflectanceKernel, FibreLimitHoldsUpToItsGate) {
     std::mt19937 rng(31);
-    const double shininesses[] = {1, 10, 100}, bounds[] = {0.05, 0.06, 0.22};
+    const double shininesses[] = {1, 10, 100}, bounds[] = {0.05, 0.06, 0.05};
     for (std::size_t i = 0; i < 3; ++i) {
         const double ratio = 0.95 * fibreGateRatio(shininesses[i]);
         const double error = specularErrorAgainstThePaper({1, 1, ratio}, shininesses[i], 60, rng);
         std::cout << "needle " << ratio << ", shininess " << shininesses[i] << ": " << error << "\n";
         EXPECT_LE(error, bounds[i]) << "needle " << ratio << ", shininess " << shininesses[i];
     }
+}
+
+namespace {
+
+struct SpecularErrors {
+    double mean;  ///< mean |fast − paper| / mean paper
+    double p95;   ///< 95th percentile of |fast − paper| / mean paper
+};
+
+// The specular factor's errors against the paper's integration (96 cells per axis) on `count`
+// ellipsoids R diag(σ²) Rᵀ, σ = sigma() per case, each lit at a highlight: v random, l its mirror
+// about a normal N ∝ S^{1/2}u (u random; the map concentrates N where the ellipsoid's normals
+// are, on a needle's band), so that the lobe's peak lies on the normals and the specular factor
+// is large. (With l and v both random, the lobe misses a needle's band in most cases.)
+template <class Sigma>
+SpecularErrors aimedSpecularErrors(Sigma sigma, double shininess, int count, std::mt19937& rng) {
+    std::normal_distribution<double> n;
+    std::vector<double> fast, paper;
+    for (int k = 0; k < count; ++k) {
+        const Eigen::Matrix3d r = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+        const Eigen::Vector3d axes = sigma();
+        const SggxMatrix m = toSggx(r * axes.cwiseAbs2().asDiagonal() * r.transpose());
+        const Eigen::Vector3d normal = (r * axes.asDiagonal() * r.transpose() * randomDirection(rng)).normalized();
+        Eigen::Vector3d v = randomDirection(rng);
+        if (v.dot(normal) < 0) v = -v;
+        const Eigen::Vector3d l = 2 * normal.dot(v) * normal - v;
+        fast.push_back(reflectanceFast(m, l, v, shininess).specular);
+        paper.push_back(reflectanceReference(m, l, v, shininess, 96).specular);
+    }
+    double scale = 0;
+    for (const double p : paper) scale += p / count;
+    std::vector<double> errors;
+    double mean = 0;
+    for (std::size_t k = 0; k < fast.size(); ++k) {
+        errors.push_back(std::abs(fast[k] - paper[k]) / scale);
+        mean += errors.back() / count;
+    }
+    std::sort(errors.begin(), errors.end());
+    return {mean, errors[std::size_t(0.95 * (count - 1))]};
+}
+
+}  // namespace
+
+// Issue 15, row 16: the bush's voxels at shininess 1000 were 0.156 off (bench/vtex_specular_estimators),
+// the error carried by one needle of axis ratios 0.10 (its thickness against its cross-section)
+// and 0.21 (its cross-section's), 3.3 lobe widths thick: past the fibre limit's gate, where the
+// lattice and lobe missed the product of its band of normals and the narrow lobe. The band rule
+// (src/band_specular.h) takes it. Lit at its highlights, against the paper's integration (within
+// 0.2 % of a converged band rule and of Monte Carlo there): the lattice and lobe measured 0.069
+// mean and 0.232 at the 95th percentile, the band rule 0.022 and 0.072; bounds: the row's goal.
+TEST(ReflectanceKernel, BandRuleAgreesWithThePapersIntegration) {
+    std::mt19937 rng(41);
+    const SpecularErrors e = aimedSpecularErrors([] { return Eigen::Vector3d(0.10 * 0.21, 0.21, 1); }, 1000, 60, rng);
+    std::cout << "needle 0.10 / 0.21, shininess 1000: mean " << e.mean << ", 95th percentile " << e.p95 << "\n";
+    EXPECT_LE(e.mean, 0.05);
+    EXPECT_LE(e.p95, 0.15);
+}
+
+// The band rule across its window: needles 1, 2 and 3.5 lobe widths thick (axis ratio × √(n+1)),
+// their cross-sections' axis ratios log-uniform in [0.03, 1], lit at their highlights, at
+// shininess 100, 300 and 1000, against the paper's integration. The lattice and lobe measured
+// up to 0.080 mean (thickness 1 at 1000) and 0.342 at the 95th percentile (2 at 1000), over the
+// goal at 300 and 1000; the band rule at most 0.015 and 0.084 (2 at 1000); bounds: the row's goal.
+TEST(ReflectanceKernel, BandRuleHoldsAcrossItsWindow) {
+    std::mt19937 rng(43);
+    std::uniform_real_distribution<double> logCross(-1.5, 0);
+    for (const double shininess : {100.0, 300.0, 1000.0})
+        for (const double thickness : {1.0, 2.0, 3.5}) {
+            const double ratio = thickness / std::sqrt(shininess + 1);
+            const auto sigma = [&] {
+                const double cross = std::pow(10.0, logCross(rng));
+                return Eigen::Vector3d(ratio * cross, cross, 1);
+            };
+            const SpecularErrors e = aimedSpecularErrors(sigma, shininess, 60, rng);
+            std::cout << "needle " << thickness << " lobe widths, shininess " << shininess << ": mean " << e.mean
+                      << ", 95th percentile " << e.p95 << "\n";
+            EXPECT_LE(e.mean, 0.05) << thickness << " lobe widths, shininess " << shininess;
+            EXPECT_LE(e.p95, 0.15) << thickness << " lobe widths, shininess " << shininess;
+        }
+}
+
+// Round needles between the band rule's lower edge (0.15 lobe widths) and the fibre gate under
+// random l and v: the lobe meets the band's tails off its circle, which the fibre limit, a line,
+// has not (src/band_specular.h, kBandThinnest). The paper's integration at 192 cells per axis
+// (the kernel's errors against it within 0.5 % of those against 384 cells). The fibre limit
+// measured 0.045, 0.169 (0.2 and 0.4 lobe widths) at shininess 100, 0.029, 0.087 at 300, 0.058,
+// 0.133, 0.293 (0.2, 0.4, 0.8) at 1000; the band rule at most 0.017; bounds: the row's goal.
+TEST(ReflectanceKernel, BandRuleTakesThickFibresUnderAnyLight) {
+    std::mt19937 rng(47);
+    for (const double shininess : {100.0, 300.0, 1000.0})
+        for (const double thickness : {0.2, 0.4, 0.8}) {
+            if (thickness * thickness / (shininess + 1) > vtex::primitive::detail::fibreEigenRatioGate(shininess)) continue;
+            const double ratio = thickness / std::sqrt(shininess + 1);
+            const double error = specularErrorAgainstThePaper({1, 1, ratio}, shininess, 60, rng, 192);
+            std::cout << "round needle " << thickness << " lobe widths, shininess " << shininess << ": " << error << "\n";
+            EXPECT_LE(error, 0.05) << thickness << " lobe widths, shininess " << shininess;
+        }
 }

@@ -40,7 +40,10 @@ namespace vtex::primitive {
 /// src/fibre_specular.h), the specular factor is instead the limit
 /// of an ideal fibre of elliptic cross-section, an 8- or 16-node quadrature along that circle
 /// (src/fibre_specular.h), skipped when the fibre's highlight cone misses v by more than the
-/// Phong cut-off (then every term is below 1e-6 of the lobe's peak). Errors against the paper's integration are measured
+/// Phong cut-off (then every term is below 1e-6 of the lobe's peak). From shininess 50, needles
+/// from 0.15 to 4 lobe widths thick take a product rule over their band of normals instead, along
+/// the circle and across it (src/band_specular.h): the lattice and lobe missed the product of
+/// the band and a narrow lobe, and the fibre limit the band's tails. Errors against the paper's integration are measured
 /// by bench/vtex_specular_estimators, per family of shapes and shininess (docs/micro-primitive.md).
 ///
 /// Along one ray segment v is constant, and so is l for a directional light, while S changes
@@ -84,6 +87,7 @@ private:
     /// |det C| (N·l) cosⁿα / (w |C u|³), w the point's height on the disc's hemisphere.
     double mLobeRatio = 0;
     double mFibreGate = 0;  ///< the largest λ₁/λ₂ the fibre limit takes (src/fibre_specular.h)
+    double mBandGate = 0;   ///< the largest λ₁/λ₂ the band rule takes (src/band_specular.h); 0: none
     /// Strategy B's half vectors in (wk, wj, wi) and their (N·l) cosⁿα; 0 for those facing
     /// away from v, whose normal is then v.
     alignas(16) std::array<float, kLobeSamples> mLobeX, mLobeY, mLobeZ, mLobeTerm;  // set by setUpLobe
