@@ -54,10 +54,10 @@ inline double bandEigenRatioGate(double n) { return n < kBandShininess ? 0.0 : k
 /// From kBandShininess the band rule also takes needles between a thickness of kBandThinnest and
 /// the fibre gate (0.105 (n+1)^0.3: 0.42 at 100, 0.83 at 1000): there the fibre limit, which has
 /// no normals off its circle, misses where the lobe meets the band's tails off the circle. On
-/// round needles under random l and v (a throw-away scan against the paper's integration at 128
-/// cells, docs/micro-primitive.md) it was 0.04–0.07 off at a thickness of 0.2 and 0.12–0.21 at
-/// 0.4 (shininess 50–1000), the band rule within 0.03 from 0.1; lit at their highlights both
-/// are within 0.025. At 0.15 the fibre limit keeps the needles of
+/// round needles under random l and v against the paper's integration at 192 cells
+/// (ReflectanceKernel.BandRuleTakesThickFibresUnderAnyLight) it is 0.03–0.06 off at a thickness
+/// of 0.2 and 0.09–0.17 at 0.4 (shininess 100–1000), the band rule within 0.017; lit at their
+/// highlights both are within 0.025. At 0.15 the fibre limit keeps the needles of
 /// ReflectanceKernel.FibreLimitAgreesWithThePapersIntegration (axis ratio 0.01 at shininess 100).
 inline constexpr double kBandThinnest = 0.15;
 /// The largest λ₁/λ₂ the kernel's fibre limit takes at shininess n: fibreEigenRatioGate(n), from
