@@ -130,7 +130,7 @@ struct OctreeBuilder::Impl {
                                   const bool sampled = measure && isSampled(parent, parentLevel, starts.size(),
                                                                             options.filterErrorSamples);
                                   filterChildren(&children[begin], end - begin, options.rule, sampled, f);
-                                  const float error = sampled ? float(filterErrorOf(&children[begin], end - begin, f))
+                                  const float error = sampled ? float(filterErrorOf(&children[begin], end - begin, f, options.rule))
                                                               : std::numeric_limits<float>::quiet_NaN();
                                   parents[g] = PNode{parent, f.data, error, 0};
                               }
@@ -375,7 +375,7 @@ struct OctreeBuilder::Impl {
                                       if (!std::isnan(node.filterError)) continue;
                                       const std::size_t b = starts[l][selected[s]], e = starts[l][selected[s] + 1];
                                       filterChildren(&levels[l + 1][b], e - b, options.rule, true, f);
-                                      node.filterError = float(filterErrorOf(&levels[l + 1][b], e - b, f));
+                                      node.filterError = float(filterErrorOf(&levels[l + 1][b], e - b, f, options.rule));
                                   }
                               });
             double sum = 0, max = 0;

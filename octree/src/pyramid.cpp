@@ -15,6 +15,7 @@ bool isSampled(std::uint64_t key, std::uint32_t level, std::uint64_t count, std:
 void filterChildren(const PNode* children, std::size_t count, FilterRule rule, bool keepResult, Filtered& out) {
     out.forms.clear();
     out.weights.clear();
+    out.formChildren.clear();
     out.result.reset();
     // Eight identical children: the mean is the child itself, bit for bit (so that tolerance 0
     // collapses exactly constant regions).
@@ -36,6 +37,7 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
         if (auto form = storedFilterForm(d, rule)) {
             out.forms.push_back(*form);
             out.weights.push_back(w);
+            out.formChildren.push_back(i);
         }
     }
     VoxelData& p = out.data;
@@ -58,15 +60,23 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
 // The filter error of one parent whose filter `f` of its children filterChildren has just made
 // (filterError: its NDF against the mixture of its children's), with the children rebuilt as
 // Ellipsoids; for the sampled nodes only.
-double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f) {
+double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f, FilterRule rule) {
     if (!f.result) return 0;
     std::vector<Ellipsoid> ellipsoids;
     std::vector<double> weights;
-    for (std::size_t i = 0; i < count; ++i)
-        if (auto e = unpackEllipsoid(children[i].data)) {
+    std::size_t form = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        // A child's Sggx form is its unpacked S (storedFilterForm), from which unpackEllipsoid
+        // would build the Ellipsoid again: the same Ellipsoid without unpacking S twice.
+        const bool hasForm = form < f.formChildren.size() && f.formChildren[form] == i;
+        const auto e = rule == FilterRule::Sggx && hasForm ? Ellipsoid::fromS(f.forms[form])
+                                                           : unpackEllipsoid(children[i].data);
+        form += hasForm ? 1 : 0;
+        if (e) {
             ellipsoids.push_back(*e);
             weights.push_back(children[i].data.density);
         }
+    }
     return filterError(*f.result, ellipsoids, weights);
 }
 

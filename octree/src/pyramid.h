@@ -69,6 +69,7 @@ struct Filtered {
     VoxelData data;
     std::vector<Mat3> forms;  // what the rule averages, per child with an ellipsoid
     std::vector<double> weights;
+    std::vector<std::size_t> formChildren;  // which child each form is of
     std::optional<Ellipsoid> result;
 };
 
@@ -81,7 +82,7 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
 
 // The filter error of one parent whose filter `f` of its children filterChildren has just made
 // (filterError: its NDF against the mixture of its children's), with the children rebuilt as
-// Ellipsoids; for the sampled nodes only.
-double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f);
+// Ellipsoids; for the sampled nodes only. `rule`: the one filterChildren was given.
+double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f, FilterRule rule);
 
 }  // namespace vtex::octree::detail
