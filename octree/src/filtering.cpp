@@ -91,6 +91,19 @@ std::optional<primitive::PackedPrimitive> filterFormsPacked(std::span<const Mat3
     return primitive::pack(shape->normalized());
 }
 
+std::optional<Mat3> meanFilterForm(std::span<const Mat3> forms, std::span<const double> weights) {
+    return meanForm(forms, weights);
+}
+
+void packSggxMeans(std::span<const Mat3> means, std::span<std::optional<primitive::PackedPrimitive>> out) {
+    if (means.size() != out.size()) throw std::invalid_argument("packSggxMeans: one primitive per mean");
+    thread_local std::vector<std::optional<primitive::EllipsoidShape>> shapes;  // reused: called per range of parents
+    shapes.resize(means.size());
+    Ellipsoid::shapesFromS(means, shapes);
+    for (std::size_t i = 0; i < means.size(); ++i)
+        out[i] = shapes[i] ? std::optional(primitive::pack(shapes[i]->normalized())) : std::nullopt;
+}
+
 std::optional<Mat3> storedFilterForm(const VoxelData& voxel, FilterRule rule) {
     const Vec3 sigma(voxel.sigma[0], voxel.sigma[1], voxel.sigma[2]);
     if (voxel.isEmpty() || !(sigma.maxCoeff() > 0)) return std::nullopt;

@@ -122,6 +122,9 @@ struct OctreeBuilder::Impl {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, starts.size(), 256),
                           [&](const tbb::blocked_range<std::size_t>& range) {
                               Filtered f;
+                              // The parents whose primitives finishDeferred packs together.
+                              std::vector<VoxelData*> deferred;
+                              std::vector<Mat3> means;
                               for (std::size_t g = range.begin(); g != range.end(); ++g) {
                                   const std::size_t begin = starts[g];
                                   std::size_t end = begin + 1;
@@ -133,7 +136,12 @@ struct OctreeBuilder::Impl {
                                   const float error = sampled ? float(filterErrorOf(&children[begin], end - begin, f, options.rule))
                                                               : std::numeric_limits<float>::quiet_NaN();
                                   parents[g] = PNode{parent, f.data, error, 0};
+                                  if (f.deferredMean) {
+                                      deferred.push_back(&parents[g].data);
+                                      means.push_back(*f.deferredMean);
+                                  }
                               }
+                              finishDeferred(deferred, means);
                               progress.advance(range.size());
                           });
         filtered += parents.size();

@@ -17,6 +17,7 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
     out.weights.clear();
     out.formChildren.clear();
     out.result.reset();
+    out.deferredMean.reset();
     // Eight identical children: the mean is the child itself, bit for bit (so that tolerance 0
     // collapses exactly constant regions).
     if (count == 8) {
@@ -45,6 +46,10 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
     for (int c = 0; c < 3; ++c) p.albedo[c] = mass > 0 ? float(albedo[c] / mass) : 0.0f;
     if (out.forms.empty()) {
         packIsotropic(p);
+    } else if (rule == FilterRule::Sggx && !keepResult) {
+        // filterFormsPacked's steps, its shape left to finishDeferred: no mean, no primitive.
+        out.deferredMean = meanFilterForm(out.forms, out.weights);
+        if (!out.deferredMean) packIsotropic(p);
     } else if (keepResult) {
         out.result = filterForms(out.forms, out.weights, rule);
         if (out.result) packEllipsoid(*out.result, p);
@@ -54,6 +59,20 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
         p.sigma = packed->sigma;
     } else {
         packIsotropic(p);
+    }
+}
+
+void finishDeferred(std::span<VoxelData* const> parents, std::span<const Mat3> means) {
+    thread_local std::vector<std::optional<primitive::PackedPrimitive>> packed;
+    packed.resize(means.size());
+    packSggxMeans(means, packed);
+    for (std::size_t k = 0; k < parents.size(); ++k) {
+        if (packed[k]) {
+            parents[k]->rotation = packed[k]->rotation;
+            parents[k]->sigma = packed[k]->sigma;
+        } else {
+            packIsotropic(*parents[k]);
+        }
     }
 }
 
