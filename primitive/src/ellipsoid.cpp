@@ -169,17 +169,14 @@ __attribute__((target("avx2"))) void duplicateFour(CarlsonState (&s)[4]) {
     _mm256_store_pd(out[4], power);
     for (int l = 0; l < 4; ++l) s[l] = {out[0][l], out[1][l], out[2][l], out[3][l], out[4][l]};
 }
-#endif
-#endif
 
-// unitSurfaceArea of each (c[i], b[i]), the same bits: Carlson's duplication four shapes at a
-// time where the processor has AVX2, near-spheres and the rest one at a time.
-void unitSurfaceAreas(std::span<const double> c, std::span<const double> b, std::span<double> out) {
+// unitSurfaceArea of each (c[i], b[i]), the same bits, Carlson's duplication four shapes at a
+// time (duplicateFour), near-spheres one at a time.
+void unitSurfaceAreasFour(std::span<const double> c, std::span<const double> b, std::span<double> out) {
     std::size_t pending[4], count = 0;
     CarlsonState lanes[4];
     double ys[4];  // each lane's y, which the duplication changes
     const auto flush = [&] {
-#if defined(VTEX_CARLSON_AVX2)
         for (std::size_t l = count; l < 4; ++l) lanes[l] = lanes[0];  // padding, discarded
         duplicateFour(lanes);
         for (std::size_t l = 0; l < count; ++l) {
@@ -187,16 +184,10 @@ void unitSurfaceAreas(std::span<const double> c, std::span<const double> b, std:
             const auto [rf, rd] = carlsonSeries(lanes[l]);
             out[i] = surfaceFromCarlson(c[i], b[i], ys[l], rf, rd);
         }
-#endif
         count = 0;
     };
-#if defined(VTEX_CARLSON_AVX2)
-    static const bool vector = __builtin_cpu_supports("avx2");
-#else
-    constexpr bool vector = false;
-#endif
     for (std::size_t i = 0; i < c.size(); ++i) {
-        if (!vector || 1 - c[i] < kNearSphere) {
+        if (1 - c[i] < kNearSphere) {
             out[i] = unitSurfaceArea(c[i], b[i]);
             continue;
         }
@@ -207,6 +198,17 @@ void unitSurfaceAreas(std::span<const double> c, std::span<const double> b, std:
         if (count == 4) flush();
     }
     if (count > 0) flush();
+}
+#endif
+#endif
+
+// unitSurfaceArea of each (c[i], b[i]), the same bits: four at a time where the processor has AVX2.
+void unitSurfaceAreas(std::span<const double> c, std::span<const double> b, std::span<double> out) {
+#if defined(VTEX_CARLSON_AVX2)
+    static const bool vector = __builtin_cpu_supports("avx2");
+    if (vector) return unitSurfaceAreasFour(c, b, out);
+#endif
+    for (std::size_t i = 0; i < c.size(); ++i) out[i] = unitSurfaceArea(c[i], b[i]);
 }
 
 // An orthonormal basis from σ-like quantities proportional to inverse semi-axes: the shared
