@@ -3,6 +3,7 @@
 // library), or an earlier octree with only the ancestors of a region filtered again.
 #include "cli.h"
 #include "fidelity_report.h"
+#include "huge_pages.h"
 
 #include <vtex/core/atomic_file.h>
 #include <vtex/core/memory_budget.h>
@@ -14,6 +15,7 @@
 #include <cstdio>
 #include <algorithm>
 #include <iostream>
+#include <limits>
 #include <optional>
 
 #if defined(__GLIBC__)
@@ -32,12 +34,23 @@ namespace {
 // 10,800 faults and 0.21 s of system time, 3,400 and 0.12 s with its allocations served from
 // a heap that keeps what is freed (perf stat, medians of 5). Only the build asks for this: it is
 // short-lived, and its peak resident memory stays the same (239 → 241 MiB).
-void keepFreedMemory() {
+//
+// The heap is then grown by the build's estimated memory at once and advised for huge pages
+// (reserveHugePageHeap), and the worker threads allocate from it too instead of from arenas of
+// their own (which glibc maps apart, in 4 KiB pages): the 256³ bush build's page faults fell
+// from 2,400–2,900 to 580, 470 of them the program's start, and its CPU time from 213–272 to
+// 184–201 ms (perf stat -r 10, 1 and 2 threads, six rounds alternated with the build before).
+// The threads allocate little (a few vectors per range of nodes), so the one arena's lock costs
+// nothing measurable.
+void keepFreedMemory(std::uint64_t estimate) {
 #if defined(__GLIBC__)
     mallopt(M_MMAP_MAX, 0);                 // every block from the heap, so that a freed one is reused
     mallopt(M_TRIM_THRESHOLD, 0x7fffffff);  // never give the heap's top back
     mallopt(M_TOP_PAD, 64 << 20);           // grow the heap in large steps
+    mallopt(M_ARENA_MAX, 1);                // every thread's blocks from that heap
 #endif
+    if (estimate > 0 && estimate <= std::numeric_limits<std::size_t>::max())
+        reserveHugePageHeap(std::size_t(estimate));
 }
 
 // Refuses an earlier octree that a full build of `volume` with `options` would not have made.
@@ -130,10 +143,10 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     region->needs(update);
     return [flags](const GlobalOptions& global) {
         const ThreadLimit threadLimit(flags->threads);
-        keepFreedMemory();
         checkOutputPath(flags->output, {flags->input, flags->source, flags->update});  // before any work (atomic_file.h)
-        checkMemoryEstimate(flags->input, "building its octree", octree::estimateBuildMemory(flags->input),
-                            flags->maxMemory);
+        const std::uint64_t estimate = octree::estimateBuildMemory(flags->input);
+        checkMemoryEstimate(flags->input, "building its octree", estimate, flags->maxMemory);
+        keepFreedMemory(estimate);
         // The source is loaded before the build, quiet or not: a bad --source fails (exit 3,
         // naming it) before any work and leaves no .vto.
         std::optional<ingest::TriangleMesh> source;

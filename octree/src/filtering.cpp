@@ -21,6 +21,23 @@ void checkSizes(std::size_t children, std::size_t weights) {
 
 bool usableWeight(double w) { return w > 0 && std::isfinite(w); }
 
+// own[p] ← (own[p] − mixture[p]/totalWeight)², for filterError: also compiled for AVX2 and
+// AVX-512 and chosen at load time, as the sums before it are (Ellipsoid's
+// accumulateNormalizedNormalDistribution): a division per direction, eight lanes at a time
+// where the processor has them. A difference and a square: nothing an FMA instruction could
+// contract, so every version gives the same bits.
+#if defined(__x86_64__) && defined(__has_attribute)
+#if __has_attribute(target_clones) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+__attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
+#endif
+void squaredDifferences(double* own, const double* mixture, double totalWeight, std::size_t n) {
+    for (std::size_t p = 0; p < n; ++p) {
+        const double difference = own[p] - mixture[p] / totalWeight;
+        own[p] = difference * difference;
+    }
+}
+
 }  // namespace
 
 std::optional<Ellipsoid> filterEllipsoids(std::span<const Ellipsoid> children,
@@ -72,6 +89,19 @@ std::optional<primitive::PackedPrimitive> filterFormsPacked(std::span<const Mat3
     const auto shape = rule == FilterRule::Neyret ? Ellipsoid::shapeFromM(*mean) : Ellipsoid::shapeFromS(*mean);
     if (!shape) return std::nullopt;
     return primitive::pack(shape->normalized());
+}
+
+std::optional<Mat3> meanFilterForm(std::span<const Mat3> forms, std::span<const double> weights) {
+    return meanForm(forms, weights);
+}
+
+void packSggxMeans(std::span<const Mat3> means, std::span<std::optional<primitive::PackedPrimitive>> out) {
+    if (means.size() != out.size()) throw std::invalid_argument("packSggxMeans: one primitive per mean");
+    thread_local std::vector<std::optional<primitive::EllipsoidShape>> shapes;  // reused: called per range of parents
+    shapes.resize(means.size());
+    Ellipsoid::shapesFromS(means, shapes);
+    for (std::size_t i = 0; i < means.size(); ++i)
+        out[i] = shapes[i] ? std::optional(primitive::pack(shapes[i]->normalized())) : std::nullopt;
 }
 
 std::optional<Mat3> storedFilterForm(const VoxelData& voxel, FilterRule rule) {
@@ -155,10 +185,7 @@ double filterError(const Ellipsoid& result, std::span<const Ellipsoid> children,
     result.accumulateNormalizedNormalDistribution(x, y, z, 1.0, own, true);
     // The squared differences first, in a loop the compiler vectorises (a division each), then
     // summed in order, as the single loop summed them.
-    for (std::size_t p = 0; p < n; ++p) {
-        const double difference = own[p] - mixture[p] / totalWeight;
-        own[p] = difference * difference;
-    }
+    squaredDifferences(own.data(), mixture.data(), totalWeight, n);
     double squaredSum = 0;
     for (std::size_t p = 0; p < n; ++p) squaredSum += own[p];
     return std::sqrt(squaredSum * 4 * std::numbers::pi / double(n));

@@ -122,6 +122,9 @@ struct OctreeBuilder::Impl {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, starts.size(), 256),
                           [&](const tbb::blocked_range<std::size_t>& range) {
                               Filtered f;
+                              // The parents whose primitives finishDeferred packs together.
+                              std::vector<VoxelData*> deferred;
+                              std::vector<Mat3> means;
                               for (std::size_t g = range.begin(); g != range.end(); ++g) {
                                   const std::size_t begin = starts[g];
                                   std::size_t end = begin + 1;
@@ -130,10 +133,15 @@ struct OctreeBuilder::Impl {
                                   const bool sampled = measure && isSampled(parent, parentLevel, starts.size(),
                                                                             options.filterErrorSamples);
                                   filterChildren(&children[begin], end - begin, options.rule, sampled, f);
-                                  const float error = sampled ? float(filterErrorOf(&children[begin], end - begin, f))
+                                  const float error = sampled ? float(filterErrorOf(&children[begin], end - begin, f, options.rule))
                                                               : std::numeric_limits<float>::quiet_NaN();
                                   parents[g] = PNode{parent, f.data, error, 0};
+                                  if (f.deferredMean) {
+                                      deferred.push_back(&parents[g].data);
+                                      means.push_back(*f.deferredMean);
+                                  }
                               }
+                              finishDeferred(deferred, means);
                               progress.advance(range.size());
                           });
         filtered += parents.size();
@@ -375,7 +383,7 @@ struct OctreeBuilder::Impl {
                                       if (!std::isnan(node.filterError)) continue;
                                       const std::size_t b = starts[l][selected[s]], e = starts[l][selected[s] + 1];
                                       filterChildren(&levels[l + 1][b], e - b, options.rule, true, f);
-                                      node.filterError = float(filterErrorOf(&levels[l + 1][b], e - b, f));
+                                      node.filterError = float(filterErrorOf(&levels[l + 1][b], e - b, f, options.rule));
                                   }
                               });
             double sum = 0, max = 0;

@@ -15,7 +15,9 @@ bool isSampled(std::uint64_t key, std::uint32_t level, std::uint64_t count, std:
 void filterChildren(const PNode* children, std::size_t count, FilterRule rule, bool keepResult, Filtered& out) {
     out.forms.clear();
     out.weights.clear();
+    out.formChildren.clear();
     out.result.reset();
+    out.deferredMean.reset();
     // Eight identical children: the mean is the child itself, bit for bit (so that tolerance 0
     // collapses exactly constant regions).
     if (count == 8) {
@@ -36,6 +38,7 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
         if (auto form = storedFilterForm(d, rule)) {
             out.forms.push_back(*form);
             out.weights.push_back(w);
+            out.formChildren.push_back(i);
         }
     }
     VoxelData& p = out.data;
@@ -43,6 +46,10 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
     for (int c = 0; c < 3; ++c) p.albedo[c] = mass > 0 ? float(albedo[c] / mass) : 0.0f;
     if (out.forms.empty()) {
         packIsotropic(p);
+    } else if (rule == FilterRule::Sggx && !keepResult) {
+        // filterFormsPacked's steps, its shape left to finishDeferred: no mean, no primitive.
+        out.deferredMean = meanFilterForm(out.forms, out.weights);
+        if (!out.deferredMean) packIsotropic(p);
     } else if (keepResult) {
         out.result = filterForms(out.forms, out.weights, rule);
         if (out.result) packEllipsoid(*out.result, p);
@@ -55,18 +62,40 @@ void filterChildren(const PNode* children, std::size_t count, FilterRule rule, b
     }
 }
 
+void finishDeferred(std::span<VoxelData* const> parents, std::span<const Mat3> means) {
+    thread_local std::vector<std::optional<primitive::PackedPrimitive>> packed;
+    packed.resize(means.size());
+    packSggxMeans(means, packed);
+    for (std::size_t k = 0; k < parents.size(); ++k) {
+        if (packed[k]) {
+            parents[k]->rotation = packed[k]->rotation;
+            parents[k]->sigma = packed[k]->sigma;
+        } else {
+            packIsotropic(*parents[k]);
+        }
+    }
+}
+
 // The filter error of one parent whose filter `f` of its children filterChildren has just made
 // (filterError: its NDF against the mixture of its children's), with the children rebuilt as
 // Ellipsoids; for the sampled nodes only.
-double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f) {
+double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f, FilterRule rule) {
     if (!f.result) return 0;
     std::vector<Ellipsoid> ellipsoids;
     std::vector<double> weights;
-    for (std::size_t i = 0; i < count; ++i)
-        if (auto e = unpackEllipsoid(children[i].data)) {
+    std::size_t form = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        // A child's Sggx form is its unpacked S (storedFilterForm), from which unpackEllipsoid
+        // would build the Ellipsoid again: the same Ellipsoid without unpacking S twice.
+        const bool hasForm = form < f.formChildren.size() && f.formChildren[form] == i;
+        const auto e = rule == FilterRule::Sggx && hasForm ? Ellipsoid::fromS(f.forms[form])
+                                                           : unpackEllipsoid(children[i].data);
+        form += hasForm ? 1 : 0;
+        if (e) {
             ellipsoids.push_back(*e);
             weights.push_back(children[i].data.density);
         }
+    }
     return filterError(*f.result, ellipsoids, weights);
 }
 

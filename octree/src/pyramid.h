@@ -69,19 +69,28 @@ struct Filtered {
     VoxelData data;
     std::vector<Mat3> forms;  // what the rule averages, per child with an ellipsoid
     std::vector<double> weights;
+    std::vector<std::size_t> formChildren;  // which child each form is of
     std::optional<Ellipsoid> result;
+    // Sggx without keepResult: the forms' mean, whose primitive the caller packs with those of
+    // other parents (packSggxMeans) into data.rotation and data.sigma.
+    std::optional<Mat3> deferredMean;
 };
 
 // The design's filter for one parent from its (1 to 8) non-empty children. The children are
 // read through storedFilterForm, not rebuilt as Ellipsoids: this runs once per node of the
 // pyramid and was the build's cost (an eigensolver and elliptic integrals per child).
 // `keepResult`: the filtered Ellipsoid is kept in out.result, for filterErrorOf; otherwise only
-// its packed form is made (filterFormsPacked), the same bytes for less.
+// its packed form is made (filterFormsPacked), the same bytes for less, and with the Sggx rule
+// left to the caller (out.deferredMean: finishDeferred packs several parents' at once).
 void filterChildren(const PNode* children, std::size_t count, FilterRule rule, bool keepResult, Filtered& out);
+
+// Packs the primitives of the parents whose filterChildren left a deferred mean: `parents[k]`'s
+// data gets the primitive of `means[k]`, as filterChildren would have packed it.
+void finishDeferred(std::span<VoxelData* const> parents, std::span<const Mat3> means);
 
 // The filter error of one parent whose filter `f` of its children filterChildren has just made
 // (filterError: its NDF against the mixture of its children's), with the children rebuilt as
-// Ellipsoids; for the sampled nodes only.
-double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f);
+// Ellipsoids; for the sampled nodes only. `rule`: the one filterChildren was given.
+double filterErrorOf(const PNode* children, std::size_t count, const Filtered& f, FilterRule rule);
 
 }  // namespace vtex::octree::detail

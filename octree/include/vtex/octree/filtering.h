@@ -42,6 +42,12 @@ std::optional<Ellipsoid> filterForms(std::span<const Mat3> forms, std::span<cons
 /// instructions): the build keeps the Ellipsoid only for the nodes whose filter error it measures.
 std::optional<primitive::PackedPrimitive> filterFormsPacked(std::span<const Mat3> forms,
                                                             std::span<const double> weights, FilterRule rule);
+/// The weighted mean of `forms` that both rules start from; empty for no positive weight.
+std::optional<Mat3> meanFilterForm(std::span<const Mat3> forms, std::span<const double> weights);
+/// filterFormsPacked with the Sggx rule for several parents at once, from the means
+/// meanFilterForm made of their forms: out[i] is what it gives for means[i], to the bit (the
+/// exact mean areas computed together: Ellipsoid::shapesFromS).
+void packSggxMeans(std::span<const Mat3> means, std::span<std::optional<primitive::PackedPrimitive>> out);
 
 /// The matrix `rule` averages for a stored voxel, read from its eigen-form (R, σ) without
 /// rebuilding its Ellipsoid: the octree build's per-child cost. For Sggx it takes the stored

@@ -83,6 +83,11 @@ public:
     /// cached forms); empty where those are.
     static std::optional<EllipsoidShape> shapeFromS(const Mat3& S);
     static std::optional<EllipsoidShape> shapeFromM(const Mat3& M);
+    /// shapeFromS of each of `S`, the same bits, the exact mean areas computed four at a time
+    /// where the processor has AVX2: Carlson's integrals are a chain of square roots and
+    /// divisions whose latency one shape waits out and four share (the octree build's filter
+    /// makes one shape per parent).
+    static void shapesFromS(std::span<const Mat3> S, std::span<std::optional<EllipsoidShape>> shapes);
     /// The design's two-step fit to a weighted set of surface normals (sign ignored): axes
     /// from the eigenvectors of E = Σ wₜ nₜnₜᵀ, then σₖ = Σ wₜ|ωₖ·nₜ| / Σ wₜ along each, and
     /// S = R diag(σₖ²) Rᵀ. Exact for the normals of one ellipsoid, a disc and a fibre; its
@@ -153,6 +158,9 @@ private:
     explicit Ellipsoid(const EllipsoidShape& shape);
     /// Sorts and floors the axes, and computes the exact mean area: every constructor's shape.
     static EllipsoidShape shapeOf(const Mat3& basis, const Vec3& semiAxes);
+    /// shapeOf without the exact mean area (NaN), and shapeFromS without it, for shapesFromS.
+    static EllipsoidShape axesOf(const Mat3& basis, const Vec3& semiAxes);
+    static std::optional<EllipsoidShape> axesFromS(const Mat3& S);
 
     void cacheForms();
 
