@@ -69,7 +69,9 @@ void BM_ReflectanceFast(benchmark::State& state) {
         benchmark::DoNotOptimize(reflectanceFast(c.s[k], c.light[k], c.view[k], shininess));
     }
 }
-BENCHMARK(BM_ReflectanceFast)->Arg(40)->Arg(15);  // shininess 20 (the scene default) and 7.5
+// Shininess 20 (the scene default) and 7.5; 100 and 1000, where the band rule takes the thick
+// needles (primitive/src/band_specular.h).
+BENCHMARK(BM_ReflectanceFast)->Arg(40)->Arg(15)->Arg(200)->Arg(2000);
 
 // A material without specular colour (the default): the kernel skips the Phong lobe's points
 // and the fibre, so this must cost what the lattice alone did.

@@ -4,7 +4,8 @@
 // band's own: the fibre limit (fibre_specular.h) takes the band as a line, the D_v lattice has
 // a few points in it, the lobe's 8 points a few in the band, and the product of the two is what
 // the integral needs (a needle of axis ratios 0.10 and 0.21 of the bush's voxels at shininess
-// 1000: the lattice and lobe 51 % off). Here the integral is a product rule over exact
+// 1000, lit at its highlights: the lattice and lobe 0.069 off the paper's integration on average,
+// 0.232 at the 95th percentile; ReflectanceKernel.BandRuleAgreesWithThePapersIntegration). Here the integral is a product rule over exact
 // coordinates of the sphere around t: N = (u(φ) + τ t)/√(1+τ²), u(φ) on the circle, τ = tan of
 // the latitude, dN = dφ dτ/(1+τ²)^{3/2}.
 //
