@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
         const render::SourceVisibility source(mesh, tree->info.source);
         const octree::ChordVisibility visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return source.visible(a, b); };
         const octree::ChordFirstHit hit = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return source.firstHit(a, b); };
-        const auto chords = octree::measureChordTransmittance(*tree, visible, tau, 4096, 1);
+        const auto chords = octree::measureChordTransmittance(*tree, visible, tau, render::kLoadChords, 1);
         const render::FaithfulLevels faithful = render::faithfulLevels(chords, render::RenderOptions{}.hybridTolerance);
         std::printf("faithful levels %d-%d (chord errors:", faithful.coarsest, faithful.finest);
         for (const auto& c : chords) std::printf(" %+.3f", c.error());
@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
             std::printf(" %.3f", fit.scale);
         }
         const std::size_t finest = std::size_t(std::max(faithful.finest, faithful.coarsest)) + 1;
-        const octree::LitFractions lit = octree::measureLitFractions(*tree, hit, visible, tau, scales, finest, 4096, 1);
+        const octree::LitFractions lit =
+            octree::measureLitFractions(*tree, hit, visible, tau, scales, finest, render::kLoadChords, 1);
         std::printf("\nmesh lit fraction %.4f (standard error %.4f, %zu chords see the mesh)\n", lit.mesh,
                     lit.meshStandardError(), lit.seen);
         std::printf("lit fraction error, volume − mesh: rows camera level, columns shadow level\n       ");

@@ -20,7 +20,7 @@ FaithfulLevels measureFaithfulLevels(const octree::Octree& tree, const octree::C
                                      double tolerance) {
     int coarsest = -1;
     const auto chords = octree::measureChordTransmittance(
-        tree, visible, tau, 4096, 1, [&](std::size_t level, const octree::ChordTransmittance& c) {
+        tree, visible, tau, kLoadChords, 1, [&](std::size_t level, const octree::ChordTransmittance& c) {
             const bool within = std::abs(c.error()) <= tolerance;
             if (within && coarsest < 0) coarsest = int(level);
             return coarsest >= 0 && !within;
@@ -28,7 +28,7 @@ FaithfulLevels measureFaithfulLevels(const octree::Octree& tree, const octree::C
     return faithfulLevels(chords, tolerance);
 }
 
-// What the lit fractions (octree::measureLitFractions, 4096 chords, as the faithful levels are
+// What the lit fractions (octree::measureLitFractions, kLoadChords, as the faithful levels are
 // measured with) decide for fitted levels: the shadow levels and the hybrid's mesh level.
 struct MeasuredLighting {
     std::vector<int> shadowLevels;  ///< TexelRuntime::shadowLevels
@@ -90,7 +90,8 @@ MeasuredLighting measureLighting(const octree::Octree& tree, const SourceBvh& so
     const std::size_t coarsest = std::size_t(std::max(faithful.coarsest, 0));
     const std::size_t finest = std::max(std::size_t(std::max(faithful.finest, 0)), coarsest);
     const octree::LitPairs wanted = [&](std::size_t c, std::size_t l) { return l <= coarsest || l + 1 == c; };
-    const octree::LitFractions lit = octree::measureLitFractions(tree, hit, visible, tau, scales, finest, 4096, 1, wanted);
+    const octree::LitFractions lit =
+        octree::measureLitFractions(tree, hit, visible, tau, scales, finest, kLoadChords, 1, wanted);
     const double margin = 2 * lit.meshStandardError();
     MeasuredLighting out{shadowLevelsFrom(lit, faithful.coarsest, margin), faithful.finest};
     out.meshLevel = meshLevelFrom(lit, out.shadowLevels, faithful, margin);

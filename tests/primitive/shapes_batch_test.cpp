@@ -67,7 +67,9 @@ TEST(ShapesFromS, AreShapeFromSBitForBit) {
         for (std::size_t i = 0; i < count; ++i) {
             const auto single = Ellipsoid::shapeFromS(matrices[begin + i]);
             ASSERT_EQ(single.has_value(), batch[i].has_value()) << matrices[begin + i];
-            if (single) ASSERT_TRUE(sameBits(*single, *batch[i])) << matrices[begin + i];
+            if (single) {
+                ASSERT_TRUE(sameBits(*single, *batch[i])) << matrices[begin + i];
+            }
         }
         begin += count;
     }

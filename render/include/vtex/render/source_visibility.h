@@ -55,6 +55,9 @@ FaithfulLevels faithfulLevels(const std::vector<octree::ChordTransmittance>& cho
 /// The shell chords the renderer fits each level's factor of τ over (`--level-fit`, docs/render.md
 /// "Levels fitted to the source"): a mean of them has a standard error ≤ 0.5/√16384 = 0.004.
 inline constexpr int kLevelFitChords = 16384;
+/// The chords the renderer measures a texel's faithful levels and its lit fractions with at load
+/// (texel_runtime.cpp; the mean of each has a standard error ≤ 0.5/√4096 = 0.008), seed 1.
+inline constexpr int kLoadChords = 4096;
 
 /// How faithful each level of a texel is to its source mesh (issue 13's measure): the
 /// transmittance along 4096 random chords of the whole texel, and over 256 beams of the level
