@@ -3,6 +3,7 @@
 // unbounded allocation or an output file. ("Loading is expected to fail, but not crash.")
 #include "gltf_builder.h"
 #include "run_vtex.h"
+#include "scratch_dir.h"
 
 #include <vtex/core/error.h>
 #include <vtex/ingest/ingest.h>
@@ -21,11 +22,7 @@ using vtex::test::GltfBuilder;
 
 namespace {
 
-fs::path dir() {
-    const fs::path d = fs::path(VTEX_TEST_TMP) / "malformed";
-    fs::create_directories(d);
-    return d;
-}
+fs::path dir() { return vtex::test::scratchDir("malformed"); }
 
 // Loads `bytes` saved as `name` and expects an InputError whose message holds `expected`.
 void expectRefused(const std::string& name, const std::string& bytes, const std::string& expected,

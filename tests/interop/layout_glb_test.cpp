@@ -1,6 +1,7 @@
 // `vtex export scene.toml -o layout.glb`: the base meshes and the texel cells read back with
 // tinygltf, the cells' corners where the scene's shells are (on and under the faces).
 #include "run_vtex.h"
+#include "scratch_dir.h"
 #include "texel_fixture.h"
 
 #include <tiny_gltf.h>
@@ -16,11 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path folder() {
-    const fs::path dir = fs::path(VTEX_TEST_TMP) / "layout";
-    fs::create_directories(dir);
-    return dir;
-}
+fs::path folder() { return test::scratchDir("layout"); }
 
 // Two 1×1 quads side by side at z = 0 and one triangle at z = 5, as an OBJ.
 void writeMeshes(const fs::path& dir) {
