@@ -3,7 +3,8 @@
 // issue 15's row 16), per family of shapes and shininess, against an unbiased Monte Carlo
 // estimate of the same integral; the paper's method at 96 cells per axis beside it as a check
 // of that truth (docs/micro-primitive.md, "The specular term of the fast path").
-//   build/bench/vtex_specular_estimators [cases per family] [Monte Carlo samples per case]
+//   build/bench/vtex_specular_estimators [cases per family] [Monte Carlo samples per case] [shininesses]
+// (shininesses comma-separated; default 1,10,30,60,100,300,1000)
 #include <vtex/octree/octree.h>
 #include <vtex/primitive/packing.h>
 #include <vtex/primitive/reflectance_kernel.h>
@@ -148,6 +149,20 @@ double percentile95(std::vector<double> x) {
 int main(int argc, char** argv) {
     const int perFamily = argc > 1 ? std::atoi(argv[1]) : 100;
     const int rounds = argc > 2 ? std::atoi(argv[2]) : 50000;
+    std::vector<double> shininesses{1, 10, 30, 60, 100, 300, 1000};
+    if (argc > 3) {
+        shininesses.clear();
+        for (const char* p = argv[3]; *p;) {
+            char* end = nullptr;
+            const double n = std::strtod(p, &end);
+            if (end == p || !(n >= 0) || n > 1e6) {
+                std::fprintf(stderr, "vtex_specular_estimators: bad shininess list '%s'\n", argv[3]);
+                return 2;
+            }
+            shininesses.push_back(n);
+            p = *end == ',' ? end + 1 : end;
+        }
+    }
     std::mt19937 rng(1);
     std::normal_distribution<double> g;
     std::uniform_real_distribution<double> logRatio(-4, 0);
@@ -166,7 +181,7 @@ int main(int argc, char** argv) {
     std::printf("mean |error| / mean and 95th percentile of |error| / mean, against Monte Carlo (%d rounds)\n", rounds);
     std::printf("%9s %-14s %8s | %-15s | %-15s | %s\n", "shininess", "family", "mean", "lattice alone", "fast path",
                 "paper 96 cells vs MC");
-    for (const double n : {1.0, 10.0, 100.0, 1000.0})
+    for (const double n : shininesses)
         for (std::size_t family = 0; family < 5; ++family) {
             std::vector<double> truth, lattice, fast, paper;
             for (const M& s : shapes[family]) {

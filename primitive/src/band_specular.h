@@ -31,6 +31,7 @@
 #include "fibre_specular.h"
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <array>
@@ -61,6 +62,25 @@ inline double bandEigenRatioGate(double n) { return n < kBandShininess ? 0.0 : k
 /// highlights both are within 0.025. At 0.15 the fibre limit keeps the needles of
 /// ReflectanceKernel.FibreLimitAgreesWithThePapersIntegration (axis ratio 0.01 at shininess 100).
 inline constexpr double kBandThinnest = 0.15;
+/// Whether the band rule takes S: λ₁ < gate · λ₂ for its two smallest eigenvalues, exactly.
+/// detail::takesFibreLimit's test from the invariants (λ₁ ≈ det S / tr adj S) is right for needles
+/// only: for a sphere it estimates λ₁/λ₂ = 0.21, which the band's window (up to 16/(n+1), 0.31 at
+/// n = 50) admitted, so spheres at shininess 50–79 took the band rule around an arbitrary axis and
+/// were 25–46 % off (ReflectanceKernel.BandRuleTakesOnlyNeedles). Its ratio is a lower bound of the
+/// true one (its λ₁, 1/Σ 1/λᵢ, is at most λ₁, and its λ₂, the smaller root of the quadratic left
+/// with that λ₁, at least λ₂), so it stays the cheap first test and this one confirms what it passes.
+/// A needle's cross-section flatter than kBandFlattest (axis ratio √(λ₂/λ₃)) is a disc, whose
+/// normals crowd around one direction: the lattice and lobe take it (on discs within 0.02, the
+/// estimator table's rows; through the band rule one such shape was 25 % off at shininess 60). The
+/// band rule's window holds down to it (ReflectanceKernel.BandRuleHoldsAcrossItsWindow).
+inline constexpr double kBandFlattest = 0.01;
+inline bool bandTakes(const Eigen::Matrix3d& s, double gate) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+    solver.computeDirect(s, Eigen::EigenvaluesOnly);
+    const Eigen::Vector3d& lambda = solver.eigenvalues();  // increasing
+    return lambda(1) > 0 && lambda(0) < gate * lambda(1) && lambda(1) >= kBandFlattest * kBandFlattest * lambda(2);
+}
+
 /// The largest λ₁/λ₂ the kernel's fibre limit takes at shininess n: fibreEigenRatioGate(n), from
 /// kBandShininess at most kBandThinnest²/(n+1).
 inline double kernelFibreEigenRatioGate(double n) {

@@ -328,7 +328,8 @@ inline ReflectanceFactors ReflectanceKernel::evaluate(const SggxMatrix& s) const
         fibre = detail::needleSpecular(s3, detail::adjugate(s3), mLight.cast<double>(), Vector3d(0, 0, 1), mCosCutoff,
                                        {mWholePower, mShininess});
     } else if (mSpecular && mBandGate > 0 && detail::takesFibreLimit(trace, trAdj, det, mBandGate)) {
-        fibre = Clones::band(*this, sFrame());
+        const Eigen::Matrix3d s3 = sFrame();
+        if (detail::bandTakes(s3, mBandGate)) fibre = Clones::band(*this, s3);
     }
     const bool mis = mSpecular && !fibre && mLobeCount > 0 && detC > 0;
     const double lobeRatio = mis ? mLobeRatio * detC / (scale * scale * scale) : 0;
