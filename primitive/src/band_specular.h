@@ -66,7 +66,8 @@ inline constexpr double kBandThinnest = 0.15;
 /// detail::takesFibreLimit's test from the invariants (λ₁ ≈ det S / tr adj S) is right for needles
 /// only: for a sphere it estimates λ₁/λ₂ = 0.21, which the band's window (up to 16/(n+1), 0.31 at
 /// n = 50) admitted, so spheres at shininess 50–79 took the band rule around an arbitrary axis and
-/// were 25–46 % off (ReflectanceKernel.BandRuleTakesOnlyNeedles). Its ratio is a lower bound of the
+/// were 25–46 % off (docs/micro-primitive.md, "The band rule's gate, exact";
+/// ReflectanceKernel.BandRuleTakesOnlyNeedles). Its ratio is a lower bound of the
 /// true one (its λ₁, 1/Σ 1/λᵢ, is at most λ₁, and its λ₂, the smaller root of the quadratic left
 /// with that λ₁, at least λ₂), so it stays the cheap first test and this one confirms what it passes.
 /// A needle's cross-section flatter than kBandFlattest (axis ratio √(λ₂/λ₃)) is a disc, whose

@@ -357,7 +357,8 @@ TEST(ReflectanceKernel, BandRuleHoldsAcrossItsWindow) {
 // and the invariants' estimate of that ratio is 0.21 for a sphere: until the exact test
 // (detail::bandTakes), spheres at shininess 50–79 took the band rule around an arbitrary axis,
 // 0.25–0.46 mean off against Monte Carlo (`build/bench/vtex_specular_estimators 60 20000
-// 50,60,70`). The gate: a sphere, a thick ellipsoid and a disc refused, needles 1 and 3.9 lobe
+// 40,49,50,51,60,64,65,70,80,90` with 082ff99's kernel; 0.03–0.05 at 40, 49, 80, 90; see
+// docs/micro-primitive.md, "The band rule's gate, exact"). The gate: a sphere, a thick ellipsoid and a disc refused, needles 1 and 3.9 lobe
 // widths thick taken, at 50 and 79. Then spheres and random shapes at 50, 60 and 70 against the
 // paper's integration: spheres 0.040–0.047 (0.31–0.35 with the invariants' test alone), random
 // shapes 0.011–0.015 (0.011–0.016); bounds: the row's goal.
@@ -370,8 +371,9 @@ TEST(ReflectanceKernel, BandRuleTakesOnlyNeedles) {
         EXPECT_FALSE(d::bandTakes(diagonal(0.5, 1, 1), gate)) << n;
         EXPECT_FALSE(d::bandTakes(diagonal(1e-6, 1e-6, 1), gate)) << n;  // a disc: λ₁ = λ₂
         // A disc whose normals spread unevenly (λ₁/λ₂ = 0.15, in the window at 50–79, but a
-        // cross-section of 0.001): 25 % off through the band rule at 60, where it carried half of
-        // the random family's mean error in `vtex_specular_estimators 300 20000 60` (0.061).
+        // cross-section of 0.001): one such shape, 25 % off through the band rule at 60, was two
+        // thirds of the random family's mean error there in `vtex_specular_estimators 300 20000
+        // 50,60,70` with kBandFlattest 0 (0.061; 0.027 with it).
         EXPECT_FALSE(d::bandTakes(diagonal(1.5e-7, 1e-6, 1), gate)) << n;
         for (const double thickness : {1.0, 3.9}) {
             const double ratio2 = thickness * thickness / (n + 1);  // λ₁/λ₂
