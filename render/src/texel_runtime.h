@@ -6,6 +6,7 @@
 #include <vtex/render/renderer.h>
 #include <vtex/render/scene.h>
 #include <vtex/render/texel_march.h>
+#include <vtex/octree/chord_transmittance.h>
 
 #include "frame.h"
 #include "source_bvh.h"
@@ -54,6 +55,12 @@ struct TexelRuntime {
         return source ? std::clamp(requested - meshLevel, 0.0, 1.0) : 0.0;
     }
 };
+
+/// The shadow levels of footprint levels 0 … coarsest − 1 from the lit fractions of the fitted
+/// levels (texel_runtime.cpp): per footprint level f, among the levels f … coarsest whose lit
+/// fraction is within `margin` of the best one's, the finest at most `tableLevel` (the near
+/// table's, NearShadowTable::kMaxLevel), else the coarsest of them.
+std::vector<int> shadowLevelsFrom(const octree::LitFractions& lit, int coarsest, double margin, int tableLevel);
 
 /// One entry per scene texel; those that no surface uses stay empty (not loaded). Throws
 /// vtex::InputError naming a volume without a root, or a source that cannot be read.

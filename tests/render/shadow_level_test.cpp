@@ -6,13 +6,18 @@
 
 #include <vtex/render/source_visibility.h>
 
+#include "../../render/src/near_shadow_table.h"
+#include "../../render/src/texel_runtime.h"
+
 #include <vtex/core/progress.h>
 #include <vtex/render/reference.h>
 #include <vtex/render/renderer.h>
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <iostream>
+#include <limits>
 
 namespace vtex::render::test {
 namespace {
@@ -100,6 +105,72 @@ TEST(ShadowLevels, TheMeshTakesOverWhereAFinerLevelLightsTheLeavesTooLittle) {
     EXPECT_LT(texelRender.stats.meshLevels[0], double(faithful.finest));
     EXPECT_GE(texelRender.stats.meshLevels[0], double(faithful.coarsest) - 1);
     EXPECT_LT(std::abs(bias), 0.03);
+}
+
+// The rule's ties (texel_runtime.cpp, shadowLevelsFrom), on lit-fraction tables whose rows are
+// the measured ones of the 2000-leaf bush and of fur at 256³ (build/bench/vtex_lit_fractions):
+// a level better by more than the margin is taken wherever it is; levels within the margin of the
+// best are ties, settled by cost: the finest a near-table look-up serves (≤ 5), else the
+// coarsest.
+TEST(ShadowLevels, TiesGoToTheCheaperLevelAndOnlyTies) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    const auto table = [&](int coarsest, std::vector<std::vector<double>> rows) {
+        octree::LitFractions lit;
+        lit.mesh = 0;  // errors are the entries themselves
+        lit.volume.assign(std::size_t(coarsest) + 1, std::vector<double>(std::size_t(coarsest) + 1, nan));
+        for (std::size_t c = 1; c < rows.size() + 1; ++c) lit.volume[c] = rows[c - 1];
+        return lit;
+    };
+    // The 2000-leaf bush (F = 4, margin 0.019): camera levels 1–4 (footprints 0–3).
+    const octree::LitFractions bush = table(4, {{0.163, 0.168, 0.188, 0.191, 0.190},
+                                                {nan, 0.148, 0.117, 0.106, 0.099},
+                                                {nan, nan, 0.110, 0.041, 0.020},
+                                                {nan, nan, nan, 0.033, -0.012}});
+    // Footprint 0: levels 0 and 1 tie (0.163, 0.168), the finest → 1; footprint 1: 2–4 tie → 4;
+    // footprints 2 and 3: level 4 better by more than the margin.
+    EXPECT_EQ(detail::shadowLevelsFrom(bush, 4, 0.019, 5), (std::vector<int>{1, 4, 4, 4}));
+    // Fur (F = 8, margin 0.017), footprints 3 and 4 (camera levels 4 and 5): levels 4–8 tie at 3
+    // → 5, the finest the table serves; at 4 only 6–8 tie (level 5 is 0.019 off the best) → 6,
+    // the coarsest tie; a finer level better by more than the margin is still taken (→ 8).
+    octree::LitFractions fur = table(8, {});
+    fur.volume[4] = {nan, nan, nan, 0.265, 0.252, 0.249, 0.246, 0.243, 0.246};
+    fur.volume[5] = {nan, nan, nan, nan, 0.253, 0.227, 0.220, 0.213, 0.208};
+    fur.volume[6] = {nan, nan, nan, nan, nan, 0.30, 0.25, 0.20, 0.10};
+    const std::vector<int> levels = detail::shadowLevelsFrom(fur, 8, 0.017, 5);
+    ASSERT_EQ(levels.size(), 8u);  // footprints 0–7
+    EXPECT_EQ(levels[3], 5);
+    EXPECT_EQ(levels[4], 6);
+    EXPECT_EQ(levels[5], 8);
+    // Rows with nothing measured keep the coarsest faithful level.
+    EXPECT_EQ(levels[0], 8);
+    EXPECT_EQ(levels[7], 8);
+    // Without a table (tableLevel −1) every tie goes to the coarsest; with one past F, to F's side.
+    EXPECT_EQ(detail::shadowLevelsFrom(fur, 8, 0.017, -1)[3], 4);
+    EXPECT_EQ(detail::shadowLevelsFrom(fur, 8, 0.017, 30)[3], 8);
+}
+
+// Fur (the `fur` pattern's 300 hairs at 128³; coarsest faithful level 7), whose fitted levels the
+// lit fractions cannot tell apart as shadow levels: every one is lit 0.2–0.3 more often than the
+// hairs and the finer ones only a few hundredths less (build/bench/vtex_lit_fractions). Seen as
+// the dense bush above (a cell ≈ 12 px, camera levels 4–5, so shadow footprints 3–4), the
+// ties go to level 5, the finest the near table serves (its queries a look-up each), and the
+// hairs' light is within 5.5 % of the reference's (measured −4.0 %). The rule before, ties to the
+// coarsest faithful level, took level 7 for every footprint from 2 (a build of 2a46337) and gave
+// −7.0 % (a throw-away build passing tableLevel 30, which takes the same levels); on the 256³
+// fur in the bush field's middle view (docs/render.md, "Ties past the table") the change took
+// the render from 12.3 s and −13 % to 2.7 s and −8.7 %.
+TEST(ShadowLevels, FurShadowsStayWhereTheyAreCheapAndLitAsTheMesh) {
+    static const SourcedTexel fur = makeSourcedTexel("fur", 0, 128);
+    const auto [texelRender, bias] = renderLeaves(denseBushField(fur, 14));
+    ASSERT_EQ(texelRender.stats.shadowLevels.size(), 1u);
+    const std::vector<int>& levels = texelRender.stats.shadowLevels[0];
+    std::cout << "fur: light " << bias * 100 << " % (mean level " << texelRender.stats.meanLevel() << ", shadow levels";
+    for (int l : levels) std::cout << " " << l;
+    std::cout << ")\n";
+    ASSERT_GE(levels.size(), 5u);
+    EXPECT_LE(levels[3], detail::NearShadowTable::kMaxLevel);
+    EXPECT_LE(levels[4], detail::NearShadowTable::kMaxLevel);
+    EXPECT_LT(std::abs(bias), 0.055);
 }
 
 }  // namespace
