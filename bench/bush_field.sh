@@ -16,12 +16,16 @@
 # dense / sparse ≤ 1.15), and near (no goal; beside the dense mesh's 1-spp reference), with their
 # RMSE and bias against their own truths (TRUTH_SPP, near TRUTH_SPP_NEAR); SWEEP=1 renders defaults and the 1-spp reference at 12 distances,
 # geometric from near to far, against truths at SWEEP_TRUTH_SPP (64): mean green and RMSE.
+# PATTERN=NAME puts another `vtex pattern` texel (grass, fur, brushed, blocks, topiary) in the
+# bush's place, sampled and built as the bush is (its files keep the bush's names; the truths'
+# keys hash the mesh, so each pattern has its own), to see how the renderer does beyond the bush.
 # Truths are cached in DIR/truth/, keyed by scene file, spp, source mesh and TRUTH_KEY ("v1";
 # change it when the reference renderer changes); a reused truth is announced.
 # Writes DIR/bush_field.md and DIR/bush_field.csv, and prints the markdown.
 # Usage: bench/bush_field.sh VTEX_BINARY [DIR] [RUNS] [THREADS]
 #   (environment: WIDTH, HEIGHT (768×576), TRUTH_SPP (1024), TRUTH_SPP_NEAR (256), RUNS,
-#    THREADS, VARIANTS, DENSE, SWEEP, SWEEP_TRUTH_SPP, TRUTH_KEY, COMPARE_VTEX; arguments win)
+#    THREADS, VARIANTS, DENSE, SWEEP, SWEEP_TRUTH_SPP, TRUTH_KEY, COMPARE_VTEX, PATTERN (bush);
+#    arguments win)
 set -eu
 VTEX=${1:?usage: bush_field.sh VTEX_BINARY [DIR] [RUNS] [THREADS]}
 case $VTEX in /*) ;; *) VTEX=$(pwd)/$VTEX ;; esac
@@ -36,6 +40,7 @@ SWEEP_TRUTH_SPP=${SWEEP_TRUTH_SPP:-64}
 TRUTH_KEY=${TRUTH_KEY:-v1}
 VARIANTS=${VARIANTS:-}
 DENSE=${DENSE:-0}
+PATTERN=${PATTERN:-bush}
 SWEEP=${SWEEP:-0}
 # The binary that measures (`vtex compare` with its bias and split fields): by default the one
 # measured; set it to a current build to measure an older one (a before/after table).
@@ -48,7 +53,7 @@ mkdir -p "$DIR/truth" "$DIR/out"
 cd "$DIR"
 
 # The texels: rebuilt every run, since what is measured is today's sampler and builder.
-"$VTEX" -q pattern bush -o bush.glb
+"$VTEX" -q pattern "$PATTERN" -o bush.glb
 "$VTEX" -q sample bush.glb -o bush.vtl --resolution 256
 "$VTEX" -q build bush.vtl -o bush.vto
 if [ "$DENSE" = 1 ]; then

@@ -157,8 +157,8 @@ TEST(ShadowLevels, TiesGoToTheCheaperLevelAndOnlyTies) {
 // hairs' light is within 5.5 % of the reference's (measured −4.0 %). The rule before, ties to the
 // coarsest faithful level, took level 7 for every footprint from 2 (a build of 2a46337) and gave
 // −7.0 % (a throw-away build passing tableLevel 30, which takes the same levels); on the 256³
-// fur in the bush field's middle view (docs/render.md, "Ties past the table") the change took
-// the render from 12.3 s and −13 % to 2.7 s and −8.7 %.
+// fur in the bush field's middle view (`PATTERN=fur bench/bush_field.sh`, docs/error-vs-time.md)
+// the change took the render from 10.8 s and −12.7 % (green) to 2.6 s and −8.4 %.
 TEST(ShadowLevels, FurShadowsStayWhereTheyAreCheapAndLitAsTheMesh) {
     static const SourcedTexel fur = makeSourcedTexel("fur", 0, 128);
     const auto [texelRender, bias] = renderLeaves(denseBushField(fur, 14));
