@@ -48,8 +48,9 @@ struct MeasuredLighting {
 // the measurement cannot tell apart, are ties. Ties are settled by cost: among those a query
 // reads from the near table (l ≤ tableLevel: a look-up each, whatever the level) the finest,
 // nearest F as the rule without the fit; where none is, the coarsest, since past the table every
-// query marches, and each level finer doubles its voxels (fur at 256³, F = 8: shadows at level 8
-// made its middle view 8× slower than at 4, and 13 % too dark instead of 5 %).
+// query marches, and each level finer doubles its voxels (fur at 256³, F = 8, in the bush field's
+// middle view: 10.8 s and 12.7 % too dark with every shadow at 8, 2.6 s and 8.4 % with the ties
+// settled so; `PATTERN=fur bench/bush_field.sh`, docs/error-vs-time.md).
 std::vector<int> shadowLevelsFrom(const octree::LitFractions& lit, int coarsest, double margin, int tableLevel) {
     std::vector<int> levels;
     for (std::size_t f = 0; f < std::size_t(std::max(coarsest, 0)) && f + 1 < lit.volume.size(); ++f) {

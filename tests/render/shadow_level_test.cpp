@@ -22,15 +22,15 @@
 namespace vtex::render::test {
 namespace {
 
-// A 4×4 field of the dense bush seen from `distance` along the benchmark's middle direction, lit,
-// its ground black: the image is the leaves' light alone.
-Scene denseBushField(const SourcedTexel& bush, double distance) {
+// A 4×4 field of `texel` seen from `distance` along the benchmark's middle direction, lit, its
+// ground black: the image is the texel's light alone.
+Scene blackGroundField(const SourcedTexel& texel, double distance) {
     Scene scene = baseScene(Eigen::Vector3d(0.5, 0.5, 0.4) + distance * Eigen::Vector3d(0.43, -0.75, 0.5).normalized(),
                             Eigen::Vector3d(0.5, 0.5, 0.4), 40, 96);
     scene.lights[0].direction = Eigen::Vector3d(-1, -0.5, -1).normalized();
-    const auto texel = addSourcedTexel(scene, bush);
-    scene.texels[texel].material.specular = Color::Zero();
-    addSurface(scene, gridMesh(-1.5, -1.5, 2.5, 2.5, 0, 4), texel, 1.0);
+    const auto index = addSourcedTexel(scene, texel);
+    scene.texels[index].material.specular = Color::Zero();
+    addSurface(scene, gridMesh(-1.5, -1.5, 2.5, 2.5, 0, 4), index, 1.0);
     scene.surfaces.back().material.diffuse = Color::Zero();
     scene.surfaces.back().material.specular = Color::Zero();
     return scene;
@@ -68,7 +68,7 @@ LeavesRender renderLeaves(const Scene& scene) {
 // measured shadow levels (5 5 4 4 4 for footprint levels 0–4; the camera's mean level is 4.2)
 // light the leaves within 10 % (measured −2.1 %).
 TEST(ShadowLevels, ADenseBushIsLitAsItsMeshWhenItsShadowsAreMeasured) {
-    const auto [texelRender, bias] = renderLeaves(denseBushField(denseBush(), 14));
+    const auto [texelRender, bias] = renderLeaves(blackGroundField(denseBush(), 14));
     ASSERT_EQ(texelRender.stats.shadowLevels.size(), 1u);
     const std::vector<int>& levels = texelRender.stats.shadowLevels[0];
     std::cout << "leaves' light " << bias * 100 << " % (mean level " << texelRender.stats.meanLevel() << ", shadow levels";
@@ -97,7 +97,7 @@ TEST(ShadowLevels, TheMeshTakesOverWhereAFinerLevelLightsTheLeavesTooLittle) {
     const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return visibility.visible(a, b); };
     const FaithfulLevels faithful =
         faithfulLevels(octree::measureChordTransmittance(*bush.tree, visible), RenderOptions{}.hybridTolerance);
-    const auto [texelRender, bias] = renderLeaves(denseBushField(bush, 4));
+    const auto [texelRender, bias] = renderLeaves(blackGroundField(bush, 4));
     ASSERT_EQ(texelRender.stats.meshLevels.size(), 1u);
     std::cout << "near: leaves' light " << bias * 100 << " % (mean level " << texelRender.stats.meanLevel()
               << ", mesh level " << texelRender.stats.meshLevels[0] << ", faithful levels " << faithful.coarsest << "–"
@@ -161,7 +161,7 @@ TEST(ShadowLevels, TiesGoToTheCheaperLevelAndOnlyTies) {
 // the change took the render from 10.8 s and −12.7 % (green) to 2.6 s and −8.4 %.
 TEST(ShadowLevels, FurShadowsStayWhereTheyAreCheapAndLitAsTheMesh) {
     static const SourcedTexel fur = makeSourcedTexel("fur", 0, 128);
-    const auto [texelRender, bias] = renderLeaves(denseBushField(fur, 14));
+    const auto [texelRender, bias] = renderLeaves(blackGroundField(fur, 14));
     ASSERT_EQ(texelRender.stats.shadowLevels.size(), 1u);
     const std::vector<int>& levels = texelRender.stats.shadowLevels[0];
     std::cout << "fur: light " << bias * 100 << " % (mean level " << texelRender.stats.meanLevel() << ", shadow levels";
