@@ -41,6 +41,12 @@ TRUTH_KEY=${TRUTH_KEY:-v1}
 VARIANTS=${VARIANTS:-}
 DENSE=${DENSE:-0}
 PATTERN=${PATTERN:-bush}
+# The dense rows are a 20 000-leaf bush against the sparse one: beside another pattern their
+# ratio would compare two texels.
+if [ "$DENSE" = 1 ] && [ "$PATTERN" != bush ]; then
+  echo "bush_field.sh: DENSE=1 compares with the bush; it cannot go with PATTERN=$PATTERN" >&2
+  exit 2
+fi
 SWEEP=${SWEEP:-0}
 # The binary that measures (`vtex compare` with its bias and split fields): by default the one
 # measured; set it to a current build to measure an older one (a before/after table).
