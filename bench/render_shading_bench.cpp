@@ -5,6 +5,8 @@
 #include <vtex/octree/voxel.h>
 #include <vtex/primitive/reflectance_kernel.h>
 
+#include "bush_voxels.h"
+
 #include <Eigen/Geometry>
 #include <benchmark/benchmark.h>
 
@@ -52,6 +54,21 @@ const Cases& cases() {
     return c;
 }
 
+// The same light and view sequence over the S of a bush's stored voxels (bench/bush_voxels.h):
+// what a render of the bush shades, where the random mix above is mostly needles and discs.
+const Cases& bushCases() {
+    static const Cases c = [] {
+        Cases out = cases();
+        std::mt19937 rng(1);
+        const std::vector<Eigen::Matrix3d> shapes = vtex::bench::bushVoxels(rng, int(kCases));
+        out.s.clear();
+        for (std::size_t k = 0; k < kCases; ++k) out.s.push_back(SggxMatrix::fromUpper(shapes[k % shapes.size()]));
+        out.voxels.clear();
+        return out;
+    }();
+    return c;
+}
+
 void BM_UnpackS(benchmark::State& state) {
     const Cases& c = cases();
     std::size_t i = 0;
@@ -60,8 +77,7 @@ void BM_UnpackS(benchmark::State& state) {
 BENCHMARK(BM_UnpackS);
 
 // Everything per call: the basis around v and the light in it are rebuilt each time.
-void BM_ReflectanceFast(benchmark::State& state) {
-    const Cases& c = cases();
+void fastOn(benchmark::State& state, const Cases& c) {
     const double shininess = double(state.range(0)) / 2;
     std::size_t i = 0;
     for (auto _ : state) {
@@ -69,9 +85,14 @@ void BM_ReflectanceFast(benchmark::State& state) {
         benchmark::DoNotOptimize(reflectanceFast(c.s[k], c.light[k], c.view[k], shininess));
     }
 }
+void BM_ReflectanceFast(benchmark::State& state) { fastOn(state, cases()); }
 // Shininess 20 (the scene default) and 7.5; 100 and 1000, where the band rule takes the thick
 // needles (primitive/src/band_specular.h).
 BENCHMARK(BM_ReflectanceFast)->Arg(40)->Arg(15)->Arg(200)->Arg(2000);
+
+// The bush's voxels at shininess 20 (the scene default) and 100.
+void BM_ReflectanceFastBush(benchmark::State& state) { fastOn(state, bushCases()); }
+BENCHMARK(BM_ReflectanceFastBush)->Arg(40)->Arg(200);
 
 // A material without specular colour (the default): the kernel skips the Phong lobe's points
 // and the fibre, so this must cost what the lattice alone did.
@@ -88,8 +109,7 @@ BENCHMARK(BM_ReflectanceFastDiffuse)->Arg(40);
 
 // The renderer's case: one kernel per (l, v) along a ray segment, only S changes per call. The
 // same 1024 (S, l, v) as above, with the kernels built before timing.
-void BM_ReflectanceKernel(benchmark::State& state) {
-    const Cases& c = cases();
+void kernelOn(benchmark::State& state, const Cases& c) {
     const double shininess = double(state.range(0)) / 2;
     std::vector<ReflectanceKernel> kernels;
     for (std::size_t k = 0; k < kCases; k += kSegment) kernels.emplace_back(c.light[k], c.view[k], shininess);
@@ -99,7 +119,10 @@ void BM_ReflectanceKernel(benchmark::State& state) {
         benchmark::DoNotOptimize(kernels[k / kSegment](c.s[k]));
     }
 }
+void BM_ReflectanceKernel(benchmark::State& state) { kernelOn(state, cases()); }
 BENCHMARK(BM_ReflectanceKernel)->Arg(40)->Arg(15);
+void BM_ReflectanceKernelBush(benchmark::State& state) { kernelOn(state, bushCases()); }
+BENCHMARK(BM_ReflectanceKernelBush)->Arg(40)->Arg(200);
 
 // What a ray segment pays once per light before its voxels: building the kernel.
 void BM_ReflectanceKernelSetup(benchmark::State& state) {
