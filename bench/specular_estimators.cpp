@@ -92,6 +92,16 @@ public:
         }
         return sum / rounds;
     }
+    // The diffuse factor E_{D_v}[(N·l)⁺] / π, unbiased: visible normals drawn by the sampler.
+    double diffuseMonteCarlo(std::mt19937& rng, int rounds) const {
+        std::uniform_real_distribution<double> u(0, 1);
+        double sum = 0;
+        for (int k = 0; k < rounds; ++k) {
+            const double r = std::sqrt(u(rng)), phi = 2 * kPi * u(rng);
+            sum += std::max(0.0, visibleNormal(r * std::cos(phi), r * std::sin(phi)).dot(mL));
+        }
+        return sum / rounds / kPi;
+    }
     // The 16-point D_v lattice alone: the fast path before row 16.
     double latticeOnly() const {
         const double golden = kPi * (3 - std::sqrt(5.0));
@@ -154,6 +164,68 @@ Percentile errorPercentile(const std::vector<double>& estimate, const std::vecto
     return {value, draws[std::size_t(0.05 * (resamples - 1))], draws[std::size_t(0.95 * (resamples - 1))]};
 }
 
+/// One family at one shininess: the cases' light and view drawn in order from `rng` and `g` (so that the
+/// cases do not depend on the threads), then every estimate of every case in parallel. Diffuse:
+/// the diffuse factor (no lattice-alone column: the fast path's diffuse is that lattice).
+struct Estimates {
+    std::vector<double> truth, lattice, fast, paper;
+};
+Estimates estimate(const std::vector<M>& shapes, double n, std::mt19937& rng, std::normal_distribution<double>& g, int rounds,
+                   bool diffuse) {
+    std::vector<V> lights, views;
+    for (std::size_t k = 0; k < shapes.size(); ++k) {
+        const V l(g(rng), g(rng), g(rng)), v(g(rng), g(rng), g(rng));
+        lights.push_back(l.normalized());
+        views.push_back(v.normalized());
+    }
+    const std::size_t count = shapes.size();
+    Estimates e{std::vector<double>(count), std::vector<double>(count), std::vector<double>(count), std::vector<double>(count)};
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t k) {
+        const V& l = lights[k];
+        const V& v = views[k];
+        const Specular integral(shapes[k], l, v, n);
+        std::mt19937 mc(7);
+        const SggxMatrix m = SggxMatrix::fromUpper(shapes[k]);
+        if (diffuse) {
+            e.truth[k] = integral.diffuseMonteCarlo(mc, rounds);
+            e.fast[k] = reflectanceFast(m, l, v, n).diffuse;
+            e.paper[k] = reflectanceReference(m, l, v, n, 96).diffuse;
+            return;
+        }
+        e.truth[k] = integral.monteCarlo(mc, rounds);
+        e.lattice[k] = integral.latticeOnly();
+        e.fast[k] = reflectanceFast(m, l, v, n).specular;
+        e.paper[k] = reflectanceReference(m, l, v, n, 96).specular;
+    });
+    return e;
+}
+
+/// Mean and 95th percentile of |x − truth| / mean(truth).
+std::pair<double, double> errors(const std::vector<double>& x, const std::vector<double>& truth) {
+    double mean = 0, meanError = 0;
+    for (double t : truth) mean += t / double(truth.size());
+    std::vector<double> e;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        e.push_back(std::abs(x[i] - truth[i]) / mean);
+        meanError += e.back() / double(x.size());
+    }
+    return {meanError, percentile95(e)};
+}
+
+void printRow(const char* first, const char* family, const Estimates& e, bool lattice) {
+    double mean = 0;
+    for (double t : e.truth) mean += t / double(e.truth.size());
+    const auto [fm, fp] = errors(e.fast, e.truth);
+    const auto [pm, pp] = errors(e.paper, e.truth);
+    const Percentile interval = errorPercentile(e.fast, e.truth);
+    std::printf("%9s %-14s %8.4f | ", first, family, mean);
+    if (lattice) {
+        const auto [lm, lp] = errors(e.lattice, e.truth);
+        std::printf("%6.3f / %6.3f | ", lm, lp);
+    }
+    std::printf("%6.3f / %6.3f [%5.3f, %5.3f] | %6.3f / %6.3f\n", fm, fp, interval.low, interval.high, pm, pp);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -193,41 +265,13 @@ int main(int argc, char** argv) {
                 "(95th: 90 % int.)", "paper 96 cells vs MC");
     for (const double n : shininesses)
         for (std::size_t family = 0; family < 5; ++family) {
-            const std::vector<M>& familyShapes = shapes[family];
-            std::vector<V> lights, views;  // drawn in order, so that the cases do not depend on the threads
-            for (std::size_t k = 0; k < familyShapes.size(); ++k) {
-                const V l(g(rng), g(rng), g(rng)), v(g(rng), g(rng), g(rng));
-                lights.push_back(l.normalized());
-                views.push_back(v.normalized());
-            }
-            const std::size_t count = familyShapes.size();
-            std::vector<double> truth(count), lattice(count), fast(count), paper(count);
-            tbb::parallel_for(std::size_t(0), count, [&](std::size_t k) {
-                const V& l = lights[k];
-                const V& v = views[k];
-                const Specular integral(familyShapes[k], l, v, n);
-                std::mt19937 mc(7);
-                truth[k] = integral.monteCarlo(mc, rounds);
-                lattice[k] = integral.latticeOnly();
-                const SggxMatrix m = SggxMatrix::fromUpper(familyShapes[k]);
-                fast[k] = reflectanceFast(m, l, v, n).specular;
-                paper[k] = reflectanceReference(m, l, v, n, 96).specular;
-            });
-            double mean = 0;
-            for (double t : truth) mean += t / double(truth.size());
-            auto errors = [&](const std::vector<double>& x, double& meanError) {
-                std::vector<double> e;
-                meanError = 0;
-                for (std::size_t i = 0; i < x.size(); ++i) {
-                    e.push_back(std::abs(x[i] - truth[i]) / mean);
-                    meanError += e.back() / double(x.size());
-                }
-                return percentile95(e);
-            };
-            double lm, fm, pm;
-            const double lp = errors(lattice, lm), fp = errors(fast, fm), pp = errors(paper, pm);
-            const Percentile interval = errorPercentile(fast, truth);
-            std::printf("%9.0f %-14s %8.4f | %6.3f / %6.3f | %6.3f / %6.3f [%5.3f, %5.3f] | %6.3f / %6.3f\n", n, families[family],
-                        mean, lm, lp, fm, fp, interval.low, interval.high, pm, pp);
+            char label[32];
+            std::snprintf(label, sizeof label, "%.0f", n);
+            printRow(label, families[family], estimate(shapes[family], n, rng, g, rounds, false), true);
         }
+    // The diffuse factor does not depend on the shininess: one row per family, drawn after the
+    // specular rows (which stay the cases they were).
+    std::printf("\ndiffuse factor, the same measures\n%9s %-14s %8s | %-15s %-16s | %s\n", "", "family", "mean", "fast path",
+                "(95th: 90 % int.)", "paper 96 cells vs MC");
+    for (std::size_t family = 0; family < 5; ++family) printRow("", families[family], estimate(shapes[family], 20, rng, g, rounds, true), false);
 }
