@@ -95,6 +95,147 @@ std::size_t sceneTexelIndex(const render::Scene& scene, const std::string& name)
     throw InputError(scene.file, "the pipeline binds texel '" + name + "', which the scene does not define");
 }
 
+namespace {
+
+// One [[source]] table (`path` names it in messages): a pattern or a file, the options the
+// source reads and no other.
+SourceStep readSource(TomlReader& reader, const toml::table& t, const std::string& path, std::set<std::string>& sourceNames) {
+    const auto& patterns = sampler::patternNames();
+    reader.checkKeys(t, path, {"name", "pattern", "file", "up", "fit", "seed", "count", "fluctuation", "lean", "variant"});
+    SourceStep s;
+    s.name = reader.string(t, path, "name", {});
+    checkName(reader, TomlReader::join(path, "name"), s.name, sourceNames);
+    const bool hasPattern = t.contains("pattern"), hasFile = t.contains("file");
+    if (hasPattern == hasFile) reader.fail(path, "give exactly one of 'pattern' and 'file'");
+    if (hasPattern) {
+        s.pattern = reader.string(t, path, "pattern", {});
+        if (std::find(patterns.begin(), patterns.end(), s.pattern) == patterns.end())
+            reader.fail(TomlReader::join(path, "pattern"), "unknown pattern '" + s.pattern + "'");
+    } else {
+        s.file = reader.resolve(TomlReader::join(path, "file"), reader.string(t, path, "file", {}));
+        requireFile(reader, TomlReader::join(path, "file"), s.file);
+        // As `vtex ingest --up x|y|z --fit keep|cell`.
+        const std::string up = reader.string(t, path, "up", std::string());
+        if (!up.empty() && up != "x" && up != "y" && up != "z")
+            reader.fail(TomlReader::join(path, "up"), "must be \"x\", \"y\" or \"z\"");
+        s.up = up.empty() ? 0 : up[0];
+        const std::string fit = reader.string(t, path, "fit", "keep");
+        if (fit != "keep" && fit != "cell") reader.fail(TomlReader::join(path, "fit"), "must be \"keep\" or \"cell\"");
+        s.fitCell = fit == "cell";
+    }
+    for (const char* key : {"up", "fit"})
+        if (hasPattern && t.contains(key))
+            reader.fail(TomlReader::join(path, key), "a pattern source is already in the unit cell, +Z up");
+    s.seed = std::uint64_t(reader.integer(t, path, "seed", 1, 0, std::numeric_limits<long long>::max()));
+    s.count = int(reader.integer(t, path, "count", 0, 0, 1'000'000));
+    s.fluctuation = reader.number(t, path, "fluctuation", -1.0, -1.0, 3.2);
+    s.leanDegrees = reader.number(t, path, "lean", 0.0, -89.0, 89.0);
+    s.variant = reader.string(t, path, "variant", std::string());
+    // A key the source does not read is refused, not silently ignored: a file source reads
+    // none of the pattern keys, a pattern only its own (sampler::patternUses).
+    for (const char* key : {"seed", "count", "fluctuation", "lean", "variant"})
+        if (t.contains(key) && !(hasPattern && sampler::patternUses(s.pattern, key)))
+            reader.fail(TomlReader::join(path, key),
+                        hasPattern ? "the " + s.pattern + " pattern does not use it (" + sampler::patternsUsing(key) + " do)"
+                                   : std::string("a file source has no pattern options"));
+    if (hasPattern) checkPattern(reader, path, s);
+    return s;
+}
+
+// One [[texel]] table: it names a [[source]] read before it.
+TexelStep readTexel(TomlReader& reader, const toml::table& t, const std::string& path, std::set<std::string>& texelNames,
+                    const std::set<std::string>& sourceNames) {
+    reader.checkKeys(t, path, {"name", "source", "resolution", "cyclic", "solid", "filter", "tolerance"});
+    TexelStep s;
+    s.name = reader.string(t, path, "name", {});
+    checkName(reader, TomlReader::join(path, "name"), s.name, texelNames);
+    s.source = reader.string(t, path, "source", {});
+    if (!sourceNames.count(s.source))
+        reader.fail(TomlReader::join(path, "source"), "no [[source]] named '" + s.source + "'");
+    s.resolution = std::uint32_t(reader.integer(t, path, "resolution", 64, 1, 4096));
+    if ((s.resolution & (s.resolution - 1)) != 0)
+        reader.fail(TomlReader::join(path, "resolution"), "must be a power of two");
+    if (t.contains("cyclic")) s.cyclic = reader.boolean(t, path, "cyclic", {});
+    s.solid = reader.enumeration(t, path, "solid", s.solid, sampler::kSolidModeNames);
+    s.filter = reader.enumeration(t, path, "filter", s.filter, octree::kFilterRuleNames);
+    s.tolerance = reader.number(t, path, "tolerance", 0.0, 0.0, 1e6);
+    return s;
+}
+
+// One [[render]] table: its scene is loaded, so that it is valid and defines every texel the
+// step binds, before anything runs.
+RenderStep readRender(TomlReader& reader, const toml::table& t, const std::string& path, std::set<std::string>& renderNames,
+                      const std::set<std::string>& texelNames) {
+    reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading", "hybrid", "level_fit", "approximations", "renderer", "mode", "tiles"});
+    RenderStep s;
+    s.name = reader.string(t, path, "name", {});
+    checkName(reader, TomlReader::join(path, "name"), s.name, renderNames);
+    s.scene = reader.resolve(TomlReader::join(path, "scene"), reader.string(t, path, "scene", {}));
+    requireFile(reader, TomlReader::join(path, "scene"), s.scene);
+    if (const toml::table* bindings = reader.subtable(t, path, "texels", false)) {
+        for (const auto& [sceneName, node] : *bindings) {
+            const std::string key = TomlReader::join(TomlReader::join(path, "texels"), sceneName.str());
+            const auto value = node.as_string();
+            if (!value) reader.fail(key, "must be the name of a [[texel]]");
+            if (!texelNames.count(value->get())) reader.fail(key, "no [[texel]] named '" + value->get() + "'");
+            s.texels[std::string(sceneName.str())] = value->get();
+        }
+    }
+    // The scene itself must be valid and define every bound texel, before anything runs.
+    const render::Scene scene = render::loadScene(s.scene);
+    for (const auto& [sceneTexel, texel] : s.texels) {
+        try {
+            sceneTexelIndex(scene, sceneTexel);
+        } catch (const InputError& e) {
+            reader.fail(TomlReader::join(TomlReader::join(path, "texels"), sceneTexel), e.problem());
+        }
+    }
+    s.width = int(reader.integer(t, path, "width", 0, 0, 16384));
+    s.height = int(reader.integer(t, path, "height", 0, 0, 16384));
+    s.spp = int(reader.integer(t, path, "spp", 1, 1, 65536));
+    s.lodBias = reader.number(t, path, "lod_bias", 0.0, -16.0, 16.0);
+    s.shading = reader.enumeration(t, path, "shading", s.shading, render::kShadingModeNames);
+    s.hybrid = reader.boolean(t, path, "hybrid", true);
+    s.levelFit = reader.boolean(t, path, "level_fit", true);
+    s.approximations = reader.enumeration(t, path, "approximations", s.approximations, kApproximationsNames);
+    s.renderer = reader.enumeration(t, path, "renderer", s.renderer, kRendererNames);
+    s.mode = reader.enumeration(t, path, "mode", s.mode, render::kReferenceModeNames);
+    // Tiles of rows: no more than the image has rows (the scene's camera unless `height`).
+    s.tiles = int(reader.integer(t, path, "tiles", 1, 1, RenderStep::kMaxTiles));
+    if (const int rows = s.height > 0 ? s.height : scene.camera.height; s.tiles > rows)
+        reader.fail(TomlReader::join(path, "tiles"),
+                    std::to_string(s.tiles) + " tiles of rows, more than the image's " + std::to_string(rows) + " rows");
+    if (s.renderer == Renderer::Reference) {
+        // The reference draws each texel's source mesh: a bound texel brings the pipeline's
+        // source, an unbound one needs `source =` in the scene.
+        for (const std::size_t used : render::usedTexels(scene)) {
+            const render::TexelDef& texel = scene.texels.at(used);
+            if (!s.texels.count(texel.name) && texel.source.empty())
+                reader.fail(TomlReader::join(path, "renderer"),
+                            "texel '" + texel.name + "' of " + s.scene.filename().string() +
+                                " is neither bound to a [[texel]] nor given a source mesh in the scene");
+        }
+    }
+    return s;
+}
+
+// One [[compare]] table: two [[render]] steps read before it.
+CompareStep readCompare(TomlReader& reader, const toml::table& t, const std::string& path, std::set<std::string>& compareNames,
+                        const std::set<std::string>& renderNames) {
+    reader.checkKeys(t, path, {"name", "a", "b"});
+    CompareStep s;
+    s.name = reader.string(t, path, "name", {});
+    checkName(reader, TomlReader::join(path, "name"), s.name, compareNames);
+    for (auto [key, target] : {std::pair{"a", &s.a}, std::pair{"b", &s.b}}) {
+        *target = reader.string(t, path, key, {});
+        if (!renderNames.count(*target))
+            reader.fail(TomlReader::join(path, key), "no [[render]] named '" + *target + "'");
+    }
+    return s;
+}
+
+}  // namespace
+
 Pipeline loadPipeline(const fs::path& file) {
     const std::string text = readInputFile(file, std::uint64_t(64) << 20, "pipeline file");
 
@@ -114,146 +255,20 @@ Pipeline loadPipeline(const fs::path& file) {
 
     if (const toml::table* slurm = reader.subtable(root, "", "slurm", false)) readSlurmSettings(reader, *slurm, pipeline.slurm);
 
+    // Each kind names the one before it, so they are read in this order.
     std::set<std::string> sourceNames, texelNames, renderNames, compareNames;
-    const auto patterns = sampler::patternNames();
     const auto sources = reader.arrayOfTables(root, "source");
-    for (std::size_t i = 0; i < sources.size(); ++i) {
-        const toml::table& t = *sources[i];
-        const std::string path = indexed("source", i);
-        reader.checkKeys(t, path, {"name", "pattern", "file", "up", "fit", "seed", "count", "fluctuation", "lean", "variant"});
-        SourceStep s;
-        s.name = reader.string(t, path, "name", {});
-        checkName(reader, TomlReader::join(path, "name"), s.name, sourceNames);
-        const bool hasPattern = t.contains("pattern"), hasFile = t.contains("file");
-        if (hasPattern == hasFile) reader.fail(path, "give exactly one of 'pattern' and 'file'");
-        if (hasPattern) {
-            s.pattern = reader.string(t, path, "pattern", {});
-            if (std::find(patterns.begin(), patterns.end(), s.pattern) == patterns.end())
-                reader.fail(TomlReader::join(path, "pattern"), "unknown pattern '" + s.pattern + "'");
-        } else {
-            s.file = reader.resolve(TomlReader::join(path, "file"), reader.string(t, path, "file", {}));
-            requireFile(reader, TomlReader::join(path, "file"), s.file);
-            // As `vtex ingest --up x|y|z --fit keep|cell`.
-            const std::string up = reader.string(t, path, "up", std::string());
-            if (!up.empty() && up != "x" && up != "y" && up != "z")
-                reader.fail(TomlReader::join(path, "up"), "must be \"x\", \"y\" or \"z\"");
-            s.up = up.empty() ? 0 : up[0];
-            const std::string fit = reader.string(t, path, "fit", "keep");
-            if (fit != "keep" && fit != "cell") reader.fail(TomlReader::join(path, "fit"), "must be \"keep\" or \"cell\"");
-            s.fitCell = fit == "cell";
-        }
-        for (const char* key : {"up", "fit"})
-            if (hasPattern && t.contains(key))
-                reader.fail(TomlReader::join(path, key), "a pattern source is already in the unit cell, +Z up");
-        s.seed = std::uint64_t(reader.integer(t, path, "seed", 1, 0, std::numeric_limits<long long>::max()));
-        s.count = int(reader.integer(t, path, "count", 0, 0, 1'000'000));
-        s.fluctuation = reader.number(t, path, "fluctuation", -1.0, -1.0, 3.2);
-        s.leanDegrees = reader.number(t, path, "lean", 0.0, -89.0, 89.0);
-        s.variant = reader.string(t, path, "variant", std::string());
-        // A key the source does not read is refused, not silently ignored: a file source reads
-        // none of the pattern keys, a pattern only its own (sampler::patternUses).
-        for (const char* key : {"seed", "count", "fluctuation", "lean", "variant"})
-            if (t.contains(key) && !(hasPattern && sampler::patternUses(s.pattern, key)))
-                reader.fail(TomlReader::join(path, key),
-                            hasPattern ? "the " + s.pattern + " pattern does not use it (" + sampler::patternsUsing(key) + " do)"
-                                       : std::string("a file source has no pattern options"));
-        if (hasPattern) checkPattern(reader, path, s);
-        pipeline.sources.push_back(s);
-    }
-
+    for (std::size_t i = 0; i < sources.size(); ++i)
+        pipeline.sources.push_back(readSource(reader, *sources[i], indexed("source", i), sourceNames));
     const auto texels = reader.arrayOfTables(root, "texel");
-    for (std::size_t i = 0; i < texels.size(); ++i) {
-        const toml::table& t = *texels[i];
-        const std::string path = indexed("texel", i);
-        reader.checkKeys(t, path, {"name", "source", "resolution", "cyclic", "solid", "filter", "tolerance"});
-        TexelStep s;
-        s.name = reader.string(t, path, "name", {});
-        checkName(reader, TomlReader::join(path, "name"), s.name, texelNames);
-        s.source = reader.string(t, path, "source", {});
-        if (!sourceNames.count(s.source))
-            reader.fail(TomlReader::join(path, "source"), "no [[source]] named '" + s.source + "'");
-        s.resolution = std::uint32_t(reader.integer(t, path, "resolution", 64, 1, 4096));
-        if ((s.resolution & (s.resolution - 1)) != 0)
-            reader.fail(TomlReader::join(path, "resolution"), "must be a power of two");
-        if (t.contains("cyclic")) s.cyclic = reader.boolean(t, path, "cyclic", {});
-        s.solid = reader.enumeration(t, path, "solid", s.solid, sampler::kSolidModeNames);
-        s.filter = reader.enumeration(t, path, "filter", s.filter, octree::kFilterRuleNames);
-        s.tolerance = reader.number(t, path, "tolerance", 0.0, 0.0, 1e6);
-        pipeline.texels.push_back(s);
-    }
-
+    for (std::size_t i = 0; i < texels.size(); ++i)
+        pipeline.texels.push_back(readTexel(reader, *texels[i], indexed("texel", i), texelNames, sourceNames));
     const auto renders = reader.arrayOfTables(root, "render");
-    for (std::size_t i = 0; i < renders.size(); ++i) {
-        const toml::table& t = *renders[i];
-        const std::string path = indexed("render", i);
-        reader.checkKeys(t, path, {"name", "scene", "texels", "width", "height", "spp", "lod_bias", "shading", "hybrid", "level_fit", "approximations", "renderer", "mode", "tiles"});
-        RenderStep s;
-        s.name = reader.string(t, path, "name", {});
-        checkName(reader, TomlReader::join(path, "name"), s.name, renderNames);
-        s.scene = reader.resolve(TomlReader::join(path, "scene"), reader.string(t, path, "scene", {}));
-        requireFile(reader, TomlReader::join(path, "scene"), s.scene);
-        if (const toml::table* bindings = reader.subtable(t, path, "texels", false)) {
-            for (const auto& [sceneName, node] : *bindings) {
-                const std::string key = TomlReader::join(TomlReader::join(path, "texels"), sceneName.str());
-                const auto value = node.as_string();
-                if (!value) reader.fail(key, "must be the name of a [[texel]]");
-                if (!texelNames.count(value->get())) reader.fail(key, "no [[texel]] named '" + value->get() + "'");
-                s.texels[std::string(sceneName.str())] = value->get();
-            }
-        }
-        // The scene itself must be valid and define every bound texel, before anything runs.
-        const render::Scene scene = render::loadScene(s.scene);
-        for (const auto& [sceneTexel, texel] : s.texels) {
-            try {
-                sceneTexelIndex(scene, sceneTexel);
-            } catch (const InputError& e) {
-                reader.fail(TomlReader::join(TomlReader::join(path, "texels"), sceneTexel), e.problem());
-            }
-        }
-        s.width = int(reader.integer(t, path, "width", 0, 0, 16384));
-        s.height = int(reader.integer(t, path, "height", 0, 0, 16384));
-        s.spp = int(reader.integer(t, path, "spp", 1, 1, 65536));
-        s.lodBias = reader.number(t, path, "lod_bias", 0.0, -16.0, 16.0);
-        s.shading = reader.enumeration(t, path, "shading", s.shading, render::kShadingModeNames);
-        s.hybrid = reader.boolean(t, path, "hybrid", true);
-        s.levelFit = reader.boolean(t, path, "level_fit", true);
-        s.approximations = reader.enumeration(t, path, "approximations", s.approximations, kApproximationsNames);
-        s.renderer = reader.enumeration(t, path, "renderer", s.renderer, kRendererNames);
-        s.mode = reader.enumeration(t, path, "mode", s.mode, render::kReferenceModeNames);
-        // Tiles of rows: no more than the image has rows (the scene's camera unless `height`).
-        s.tiles = int(reader.integer(t, path, "tiles", 1, 1, RenderStep::kMaxTiles));
-        if (const int rows = s.height > 0 ? s.height : scene.camera.height; s.tiles > rows)
-            reader.fail(TomlReader::join(path, "tiles"),
-                        std::to_string(s.tiles) + " tiles of rows, more than the image's " + std::to_string(rows) + " rows");
-        if (s.renderer == Renderer::Reference) {
-            // The reference draws each texel's source mesh: a bound texel brings the pipeline's
-            // source, an unbound one needs `source =` in the scene.
-            for (const std::size_t used : render::usedTexels(scene)) {
-                const render::TexelDef& texel = scene.texels.at(used);
-                if (!s.texels.count(texel.name) && texel.source.empty())
-                    reader.fail(TomlReader::join(path, "renderer"),
-                                "texel '" + texel.name + "' of " + s.scene.filename().string() +
-                                    " is neither bound to a [[texel]] nor given a source mesh in the scene");
-            }
-        }
-        pipeline.renders.push_back(s);
-    }
-
+    for (std::size_t i = 0; i < renders.size(); ++i)
+        pipeline.renders.push_back(readRender(reader, *renders[i], indexed("render", i), renderNames, texelNames));
     const auto compares = reader.arrayOfTables(root, "compare");
-    for (std::size_t i = 0; i < compares.size(); ++i) {
-        const toml::table& t = *compares[i];
-        const std::string path = indexed("compare", i);
-        reader.checkKeys(t, path, {"name", "a", "b"});
-        CompareStep s;
-        s.name = reader.string(t, path, "name", {});
-        checkName(reader, TomlReader::join(path, "name"), s.name, compareNames);
-        for (auto [key, target] : {std::pair{"a", &s.a}, std::pair{"b", &s.b}}) {
-            *target = reader.string(t, path, key, {});
-            if (!renderNames.count(*target))
-                reader.fail(TomlReader::join(path, key), "no [[render]] named '" + *target + "'");
-        }
-        pipeline.compares.push_back(s);
-    }
+    for (std::size_t i = 0; i < compares.size(); ++i)
+        pipeline.compares.push_back(readCompare(reader, *compares[i], indexed("compare", i), compareNames, renderNames));
     return pipeline;
 }
 
