@@ -217,6 +217,128 @@ SourceView::SourceView(const ingest::TriangleMesh& mesh, const std::array<double
 
 }  // namespace detail
 
+namespace {
+
+// Ingest may split vertices along normal or UV seams: the mesh's triangles over its positions
+// welded by exact position, as the inside test needs them.
+struct WeldedMesh {
+    std::vector<Vec3> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+WeldedMesh weldByPosition(const ingest::TriangleMesh& mesh, const MeshView& view) {
+    struct Hash {
+        std::size_t operator()(const std::array<double, 3>& p) const {
+            return std::size_t(mix64(std::bit_cast<std::uint64_t>(p[0]) ^
+                                     mix64(std::bit_cast<std::uint64_t>(p[1]) ^ mix64(std::bit_cast<std::uint64_t>(p[2])))));
+        }
+    };
+    WeldedMesh out;
+    out.triangles.resize(mesh.triangles.size());
+    std::unordered_map<std::array<double, 3>, std::uint32_t, Hash> index;
+    std::vector<std::uint32_t> remap(view.positions().size());
+    for (std::size_t i = 0; i < view.positions().size(); ++i) {
+        const Vec3& p = view.positions()[i];
+        const auto [it, inserted] = index.try_emplace({p.x(), p.y(), p.z()}, std::uint32_t(out.positions.size()));
+        if (inserted) out.positions.push_back(p);
+        remap[i] = it->second;
+    }
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k) out.triangles[t][std::size_t(k)] = remap[mesh.triangles[t][std::size_t(k)]];
+    return out;
+}
+
+// What a solid voxel holds: the density (16 per voxel unless given), an isotropic ellipsoid and
+// the mesh's area-weighted mean colour.
+octree::VoxelData solidVoxel(const MeshView& view, std::size_t triangleCount, double density) {
+    octree::VoxelData solidData;
+    solidData.density = float(density);
+    octree::packIsotropic(solidData);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double weight = 0;
+    for (std::size_t t = 0; t < triangleCount; ++t) {
+        const double a = 0.5 * (view.vertex(t, 1) - view.vertex(t, 0)).cross(view.vertex(t, 2) - view.vertex(t, 0)).norm();
+        sum += a * view.colour(t).factor.cast<double>();
+        weight += a;
+    }
+    const Eigen::Vector3d albedo = weight > 0 ? Eigen::Vector3d(sum / weight) : Eigen::Vector3d::Ones();
+    solidData.albedo = {float(albedo.x()), float(albedo.y()), float(albedo.z())};
+    return solidData;
+}
+
+// The largest nodes inside `region` that hold no surface voxel (top-down: nodes with surface
+// below are opened; the others are tested once), as (level, Morton key).
+struct SolidCandidate {
+    std::uint32_t level;
+    std::uint64_t key;
+};
+std::vector<SolidCandidate> solidCandidates(const std::vector<VolumeBlock>& surface, std::uint32_t L, const VoxelBox& region) {
+    auto hasSurface = [&](std::uint32_t level, std::uint64_t key) {
+        const std::uint32_t shift = 3 * (L - level);
+        const std::uint64_t lo = key << shift, hi = (key + 1) << shift;
+        const auto it = std::lower_bound(surface.begin(), surface.end(), lo,
+                                         [](const VolumeBlock& b, std::uint64_t k) { return b.key < k; });
+        return it != surface.end() && it->key < hi;
+    };
+    std::vector<SolidCandidate> candidates, stack{{0, 0}};
+    while (!stack.empty()) {
+        const SolidCandidate node = stack.back();
+        stack.pop_back();
+        const auto c = octree::mortonDecode(node.key);
+        const std::uint32_t s = L - node.level;
+        bool disjoint = false, within = true;
+        for (int a = 0; a < 3; ++a) {
+            const std::uint32_t lo = c[std::size_t(a)] << s, hi = (c[std::size_t(a)] + 1) << s;
+            disjoint = disjoint || hi <= region.min[std::size_t(a)] || lo >= region.max[std::size_t(a)];
+            within = within && lo >= region.min[std::size_t(a)] && hi <= region.max[std::size_t(a)];
+        }
+        if (disjoint) continue;
+        if (within && !hasSurface(node.level, node.key)) {
+            candidates.push_back(node);
+        } else if (node.level < L) {
+            for (std::uint64_t k = 0; k < 8; ++k) stack.push_back({node.level + 1, (node.key << 3) | k});
+        }
+    }
+    return candidates;
+}
+
+// The solid interior of a closed mesh: every candidate node whose centre the inside test puts
+// inside becomes a solid block. A mesh the test cannot take is left hollow, unless the user
+// asked for --solid on.
+void fillSolid(const ingest::TriangleMesh& mesh, const MeshView& view, const SampleOptions& options, const VoxelBox& region,
+               octree::SparseVolume& volume, Progress& progress) {
+    const WeldedMesh welded = weldByPosition(mesh, view);
+    std::unique_ptr<detail::InsideTest> insideTest;
+    try {
+        insideTest = std::make_unique<detail::InsideTest>(welded.positions, welded.triangles);
+    } catch (const std::runtime_error& e) {
+        if (options.solid == SolidMode::On) throw InputError("<mesh>", std::string("--solid on: ") + e.what());
+    }
+    if (!insideTest) return;
+    const std::uint32_t n = options.resolution, L = volume.info.levels;
+    const double rhoSolid = options.solidDensity > 0 ? options.solidDensity : 16.0 * double(n);
+    volume.info.solidDensity = float(rhoSolid);
+    const octree::VoxelData solidData = solidVoxel(view, mesh.triangles.size(), rhoSolid);
+    const std::vector<SolidCandidate> candidates = solidCandidates(volume.blocks, L, region);
+    std::vector<std::uint8_t> isInside(candidates.size(), 0);
+    progress.start("sample: solid", candidates.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const auto c = octree::mortonDecode(candidates[i].key);
+            const double size = std::ldexp(1.0, int(L - candidates[i].level));
+            const Vec3 centre((c[0] + 0.5) * size, (c[1] + 0.5) * size, (c[2] + 0.5) * size);
+            isInside[i] = insideTest->inside(centre) ? 1 : 0;
+        }
+        progress.advance(range.size());
+    });
+    progress.finish();
+    for (std::size_t i = 0; i < candidates.size(); ++i)
+        if (isInside[i])
+            volume.blocks.push_back(VolumeBlock{candidates[i].key, std::uint8_t(candidates[i].level), octree::kBlockSolid, solidData});
+    volume.sortBlocks();
+}
+
+}  // namespace
+
 octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOptions& options, Progress& progress) {
     checkOptions(options);
     if (options.maxMemoryBytes > 0)
@@ -251,106 +373,7 @@ octree::SparseVolume sampleMesh(const ingest::TriangleMesh& mesh, const SampleOp
     const bool solid = options.solid == SolidMode::On || (options.solid == SolidMode::Auto && mesh.closed && !options.cyclic);
     if (options.solid == SolidMode::On && !mesh.closed)
         throw InputError("<mesh>", "--solid on needs a closed (watertight) mesh");
-    if (solid && triangleCount > 0) {
-        // Ingest may split vertices along normal or UV seams: weld by exact position first.
-        std::vector<Vec3> welded;
-        std::vector<std::array<std::uint32_t, 3>> triangles(triangleCount);
-        {
-            struct Hash {
-                std::size_t operator()(const std::array<double, 3>& p) const {
-                    return std::size_t(mix64(std::bit_cast<std::uint64_t>(p[0]) ^
-                                             mix64(std::bit_cast<std::uint64_t>(p[1]) ^
-                                                   mix64(std::bit_cast<std::uint64_t>(p[2])))));
-                }
-            };
-            std::unordered_map<std::array<double, 3>, std::uint32_t, Hash> index;
-            std::vector<std::uint32_t> remap(view.positions().size());
-            for (std::size_t i = 0; i < view.positions().size(); ++i) {
-                const Vec3& p = view.positions()[i];
-                const auto [it, inserted] = index.try_emplace({p.x(), p.y(), p.z()}, std::uint32_t(welded.size()));
-                if (inserted) welded.push_back(p);
-                remap[i] = it->second;
-            }
-            for (std::size_t t = 0; t < triangleCount; ++t)
-                for (int k = 0; k < 3; ++k) triangles[t][std::size_t(k)] = remap[mesh.triangles[t][std::size_t(k)]];
-        }
-        std::unique_ptr<detail::InsideTest> insideTest;
-        try {
-            insideTest = std::make_unique<detail::InsideTest>(welded, triangles);
-        } catch (const std::runtime_error& e) {
-            if (options.solid == SolidMode::On)
-                throw InputError("<mesh>", std::string("--solid on: ") + e.what());
-        }
-        if (insideTest) {
-            const double rhoSolid = options.solidDensity > 0 ? options.solidDensity : 16.0 * double(n);
-            volume.info.solidDensity = float(rhoSolid);
-            octree::VoxelData solidData;
-            solidData.density = float(rhoSolid);
-            octree::packIsotropic(solidData);
-            {
-                Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-                double weight = 0;
-                for (std::size_t t = 0; t < triangleCount; ++t) {
-                    const double a = 0.5 * (view.vertex(t, 1) - view.vertex(t, 0))
-                                               .cross(view.vertex(t, 2) - view.vertex(t, 0))
-                                               .norm();
-                    sum += a * view.colour(t).factor.cast<double>();
-                    weight += a;
-                }
-                const Eigen::Vector3d albedo = weight > 0 ? Eigen::Vector3d(sum / weight) : Eigen::Vector3d::Ones();
-                solidData.albedo = {float(albedo.x()), float(albedo.y()), float(albedo.z())};
-            }
-            // Top-down: nodes with surface below are opened; the others are tested once.
-            const std::vector<VolumeBlock>& surface = volume.blocks;
-            auto hasSurface = [&](std::uint32_t level, std::uint64_t key) {
-                const std::uint32_t shift = 3 * (L - level);
-                const std::uint64_t lo = key << shift, hi = (key + 1) << shift;
-                const auto it = std::lower_bound(surface.begin(), surface.end(), lo,
-                                                 [](const VolumeBlock& b, std::uint64_t k) { return b.key < k; });
-                return it != surface.end() && it->key < hi;
-            };
-            struct Node {
-                std::uint32_t level;
-                std::uint64_t key;
-            };
-            std::vector<Node> candidates, stack{{0, 0}};
-            while (!stack.empty()) {
-                const Node node = stack.back();
-                stack.pop_back();
-                const auto c = octree::mortonDecode(node.key);
-                const std::uint32_t s = L - node.level;
-                bool disjoint = false, within = true;
-                for (int a = 0; a < 3; ++a) {
-                    const std::uint32_t lo = c[std::size_t(a)] << s, hi = (c[std::size_t(a)] + 1) << s;
-                    disjoint = disjoint || hi <= region.min[std::size_t(a)] || lo >= region.max[std::size_t(a)];
-                    within = within && lo >= region.min[std::size_t(a)] && hi <= region.max[std::size_t(a)];
-                }
-                if (disjoint) continue;
-                if (within && !hasSurface(node.level, node.key)) {
-                    candidates.push_back(node);
-                } else if (node.level < L) {
-                    for (std::uint64_t k = 0; k < 8; ++k) stack.push_back({node.level + 1, (node.key << 3) | k});
-                }
-            }
-            std::vector<std::uint8_t> isInside(candidates.size(), 0);
-            progress.start("sample: solid", candidates.size());
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, candidates.size(), 64), [&](const auto& range) {
-                for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                    const auto c = octree::mortonDecode(candidates[i].key);
-                    const double size = std::ldexp(1.0, int(L - candidates[i].level));
-                    const Vec3 centre((c[0] + 0.5) * size, (c[1] + 0.5) * size, (c[2] + 0.5) * size);
-                    isInside[i] = insideTest->inside(centre) ? 1 : 0;
-                }
-                progress.advance(range.size());
-            });
-            progress.finish();
-            for (std::size_t i = 0; i < candidates.size(); ++i)
-                if (isInside[i])
-                    volume.blocks.push_back(VolumeBlock{candidates[i].key, std::uint8_t(candidates[i].level),
-                                                        octree::kBlockSolid, solidData});
-            volume.sortBlocks();
-        }
-    }
+    if (solid && triangleCount > 0) fillSolid(mesh, view, options, region, volume, progress);
     return volume;
 }
 
