@@ -64,15 +64,14 @@ void checkMesh(const TriangleMesh& mesh) {
 
 }  // namespace
 
-std::string encodeMeshGlb(const TriangleMesh& mesh) {
-    checkMesh(mesh);
-    tinygltf::Model model;
-    model.asset.version = "2.0";
-    model.asset.generator = "vtex ingest";
-    model.buffers.emplace_back();
+namespace {
 
-    // Vertex attributes, shared by every primitive.
+// The vertex attributes every primitive shares (POSITION with its bounds, NORMAL and TEXCOORD_0
+// where the mesh has them), as attribute name → accessor.
+std::map<std::string, int> appendVertexAttributes(tinygltf::Model& model, const TriangleMesh& mesh) {
     const std::size_t n = mesh.positions.size();
+    std::map<std::string, int> attributes;
+    if (n == 0) return attributes;
     std::vector<float> floats(n * 3);
     Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
     Eigen::Vector3f hi = -lo;
@@ -81,35 +80,27 @@ std::string encodeMeshGlb(const TriangleMesh& mesh) {
         lo = lo.cwiseMin(mesh.positions[i]);
         hi = hi.cwiseMax(mesh.positions[i]);
     }
-    std::map<std::string, int> attributes;
-    if (n > 0) {
-        int view = appendView(model, floats.data(), floats.size() * sizeof(float),
-                              TINYGLTF_TARGET_ARRAY_BUFFER);
-        int accessor = appendAccessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                      TINYGLTF_TYPE_VEC3, n);
-        model.accessors[accessor].minValues = {lo.x(), lo.y(), lo.z()};
-        model.accessors[accessor].maxValues = {hi.x(), hi.y(), hi.z()};
-        attributes["POSITION"] = accessor;
-        if (!mesh.normals.empty()) {
-            for (std::size_t i = 0; i < n; ++i)
-                std::memcpy(&floats[3 * i], mesh.normals[i].data(), 3 * sizeof(float));
-            view = appendView(model, floats.data(), floats.size() * sizeof(float),
-                              TINYGLTF_TARGET_ARRAY_BUFFER);
-            attributes["NORMAL"] = appendAccessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                                  TINYGLTF_TYPE_VEC3, n);
-        }
-        if (!mesh.uvs.empty()) {
-            floats.resize(n * 2);
-            for (std::size_t i = 0; i < n; ++i)
-                std::memcpy(&floats[2 * i], mesh.uvs[i].data(), 2 * sizeof(float));
-            view = appendView(model, floats.data(), floats.size() * sizeof(float),
-                              TINYGLTF_TARGET_ARRAY_BUFFER);
-            attributes["TEXCOORD_0"] = appendAccessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                                      TINYGLTF_TYPE_VEC2, n);
-        }
+    int view = appendView(model, floats.data(), floats.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+    int accessor = appendAccessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
+    model.accessors[accessor].minValues = {lo.x(), lo.y(), lo.z()};
+    model.accessors[accessor].maxValues = {hi.x(), hi.y(), hi.z()};
+    attributes["POSITION"] = accessor;
+    if (!mesh.normals.empty()) {
+        for (std::size_t i = 0; i < n; ++i) std::memcpy(&floats[3 * i], mesh.normals[i].data(), 3 * sizeof(float));
+        view = appendView(model, floats.data(), floats.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+        attributes["NORMAL"] = appendAccessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
     }
+    if (!mesh.uvs.empty()) {
+        floats.resize(n * 2);
+        for (std::size_t i = 0; i < n; ++i) std::memcpy(&floats[2 * i], mesh.uvs[i].data(), 2 * sizeof(float));
+        view = appendView(model, floats.data(), floats.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+        attributes["TEXCOORD_0"] = appendAccessor(model, view, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, n);
+    }
+    return attributes;
+}
 
-    // Textures, embedded as PNG.
+// Textures, embedded as PNG.
+void appendTextures(tinygltf::Model& model, const TriangleMesh& mesh) {
     for (const Image& image : mesh.textures) {
         const std::string png = encodePng(image);
         tinygltf::Image gltfImage;
@@ -120,8 +111,11 @@ std::string encodeMeshGlb(const TriangleMesh& mesh) {
         texture.source = int(model.images.size() - 1);
         model.textures.push_back(texture);
     }
+}
 
-    // Materials: base colour only; two-sided, as the design treats source triangles.
+// Materials: base colour only; two-sided, as the design treats source triangles. A mesh without
+// materials gets the default one. Returns how many were written.
+std::size_t appendMaterials(tinygltf::Model& model, const TriangleMesh& mesh) {
     std::vector<Material> materials = mesh.materials;
     if (materials.empty()) materials.emplace_back();
     for (const Material& source : materials) {
@@ -135,24 +129,27 @@ std::string encodeMeshGlb(const TriangleMesh& mesh) {
         material.doubleSided = true;
         model.materials.push_back(material);
     }
+    return materials.size();
+}
 
-    // One indexed TRIANGLES primitive per material that has triangles.
+// The mesh: one indexed TRIANGLES primitive per material that has triangles, and whether the
+// mesh is closed in extras.vtex.
+tinygltf::Mesh primitives(tinygltf::Model& model, const TriangleMesh& mesh, const std::map<std::string, int>& attributes,
+                          std::size_t materialCount) {
     tinygltf::Mesh gltfMesh;
-    std::vector<std::vector<std::uint32_t>> indices(materials.size());
+    std::vector<std::vector<std::uint32_t>> indices(materialCount);
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
         const std::uint32_t m = mesh.triangleMaterials.empty() ? 0 : mesh.triangleMaterials[t];
         indices[m].insert(indices[m].end(), mesh.triangles[t].begin(), mesh.triangles[t].end());
     }
-    for (std::size_t m = 0; m < materials.size(); ++m) {
+    for (std::size_t m = 0; m < materialCount; ++m) {
         if (indices[m].empty()) continue;
         tinygltf::Primitive primitive;
         primitive.attributes = attributes;
         primitive.mode = TINYGLTF_MODE_TRIANGLES;
         primitive.material = int(m);
-        const int view = appendView(model, indices[m].data(), indices[m].size() * 4,
-                                    TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
-        primitive.indices = appendAccessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
-                                           TINYGLTF_TYPE_SCALAR, indices[m].size());
+        const int view = appendView(model, indices[m].data(), indices[m].size() * 4, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+        primitive.indices = appendAccessor(model, view, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, indices[m].size());
         gltfMesh.primitives.push_back(primitive);
     }
     tinygltf::Value::Object vtexExtras;
@@ -160,7 +157,21 @@ std::string encodeMeshGlb(const TriangleMesh& mesh) {
     tinygltf::Value::Object extras;
     extras["vtex"] = tinygltf::Value(vtexExtras);
     gltfMesh.extras = tinygltf::Value(extras);
-    model.meshes.push_back(gltfMesh);
+    return gltfMesh;
+}
+
+}  // namespace
+
+std::string encodeMeshGlb(const TriangleMesh& mesh) {
+    checkMesh(mesh);
+    tinygltf::Model model;
+    model.asset.version = "2.0";
+    model.asset.generator = "vtex ingest";
+    model.buffers.emplace_back();
+    const std::map<std::string, int> attributes = appendVertexAttributes(model, mesh);
+    appendTextures(model, mesh);
+    const std::size_t materialCount = appendMaterials(model, mesh);
+    model.meshes.push_back(primitives(model, mesh, attributes, materialCount));
 
     tinygltf::Node node;
     node.mesh = 0;
