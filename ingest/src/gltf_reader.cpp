@@ -344,127 +344,153 @@ private:
                                     "]: instance with a singular transform skipped");
             return;
         }
-        const Eigen::Matrix3d normalMatrix = linear.inverse().transpose();
-        const bool mirrored = det < 0;
-        // The mesh's name is its faces' group (a base mesh's faces take texels by it).
-        std::uint32_t group = kNoGroup;
-        if (!mesh.name.empty()) {
-            const auto [it, inserted] = mGroups.try_emplace(meshIndex, std::uint32_t(mOut.groups.size()));
-            if (inserted) mOut.groups.push_back(mesh.name);
-            group = it->second;
+        const Instance instance{world, linear.inverse().transpose(), det < 0, groupOf(meshIndex)};
+        for (std::size_t p = 0; p < mesh.primitives.size(); ++p)
+            addPrimitive(mesh.primitives[p], "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(p) + "]",
+                         instance);
+    }
+
+    // Where a mesh instance puts its primitives: its transform, the normals' (the inverse
+    // transpose), whether it mirrors (winding flipped), the faces' group.
+    struct Instance {
+        Eigen::Matrix4d world;
+        Eigen::Matrix3d normalMatrix;
+        bool mirrored;
+        std::uint32_t group;
+    };
+
+    // The mesh's name is its faces' group (a base mesh's faces take texels by it).
+    std::uint32_t groupOf(int meshIndex) {
+        const auto& mesh = mModel.meshes[std::size_t(meshIndex)];
+        if (mesh.name.empty()) return kNoGroup;
+        const auto [it, inserted] = mGroups.try_emplace(meshIndex, std::uint32_t(mOut.groups.size()));
+        if (inserted) mOut.groups.push_back(mesh.name);
+        return it->second;
+    }
+
+    void addPrimitive(const tinygltf::Primitive& primitive, const std::string& where, const Instance& instance) {
+        if (primitive.mode == TINYGLTF_MODE_POINTS || primitive.mode == TINYGLTF_MODE_LINE ||
+            primitive.mode == TINYGLTF_MODE_LINE_LOOP || primitive.mode == TINYGLTF_MODE_LINE_STRIP) {
+            warnOnce(where + ": points and lines skipped");
+            return;
         }
+        if (primitive.mode != TINYGLTF_MODE_TRIANGLES && primitive.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+            primitive.mode != TINYGLTF_MODE_TRIANGLE_FAN)
+            throw InputError(mFile, "unknown primitive mode " + std::to_string(primitive.mode), where);
+        const auto position = primitive.attributes.find("POSITION");
+        if (position == primitive.attributes.end()) {
+            warnOnce(where + ": no POSITION attribute, skipped");
+            return;
+        }
+        std::size_t vertexCount = 0;
+        int components = 0;
+        const std::vector<double> positions = mDecoder.readAccessor(position->second, {3}, true, &vertexCount, &components);
+        std::vector<double> normals;
+        if (auto normal = primitive.attributes.find("NORMAL"); normal != primitive.attributes.end()) {
+            std::size_t n = 0;
+            normals = mDecoder.readAccessor(normal->second, {3}, true, &n, &components);
+            if (n != vertexCount) throw InputError(mFile, "NORMAL count differs from POSITION count", where);
+        }
+        const int material = materialIndex(primitive.material, where);
+        const std::vector<double> uvs = readUvs(primitive, material, vertexCount, where);
+        // Corner indices, then triangles by mode.
+        std::vector<std::uint32_t> corners;
+        if (primitive.indices >= 0) {
+            corners = mDecoder.readIndices(primitive.indices);
+        } else {
+            corners.resize(vertexCount);
+            for (std::size_t i = 0; i < vertexCount; ++i) corners[i] = std::uint32_t(i);
+        }
+        const std::vector<std::array<std::uint32_t, 3>> triangles = trianglesByMode(primitive.mode, corners, where);
+        if (mOut.triangles.size() + triangles.size() > mOptions.maxTriangles)
+            throw InputError(mFile, "more than " + std::to_string(mOptions.maxTriangles) + " triangles (see --max-triangles)", where);
+        const std::size_t base = mOut.positions.size();
+        if (base + vertexCount > std::numeric_limits<std::uint32_t>::max())
+            throw InputError(mFile, "more than 2^32 vertices", where);
+        appendVertices(instance, positions, normals, uvs, vertexCount);
+        appendTriangles(triangles, base, vertexCount, instance, material, where);
+    }
 
-        for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
-            const auto& primitive = mesh.primitives[p];
-            const std::string where = "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(p) + "]";
-            if (primitive.mode == TINYGLTF_MODE_POINTS || primitive.mode == TINYGLTF_MODE_LINE ||
-                primitive.mode == TINYGLTF_MODE_LINE_LOOP || primitive.mode == TINYGLTF_MODE_LINE_STRIP) {
-                warnOnce(where + ": points and lines skipped");
-                continue;
-            }
-            if (primitive.mode != TINYGLTF_MODE_TRIANGLES && primitive.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
-                primitive.mode != TINYGLTF_MODE_TRIANGLE_FAN)
-                throw InputError(mFile, "unknown primitive mode " + std::to_string(primitive.mode), where);
-            const auto position = primitive.attributes.find("POSITION");
-            if (position == primitive.attributes.end()) {
-                warnOnce(where + ": no POSITION attribute, skipped");
-                continue;
-            }
-            std::size_t vertexCount = 0;
+    // UVs: the set the base-colour texture samples, else TEXCOORD_0, kept either way.
+    std::vector<double> readUvs(const tinygltf::Primitive& primitive, int material, std::size_t vertexCount, const std::string& where) {
+        std::vector<double> uvs;
+        const bool textured = mOut.materials[std::size_t(material)].baseColorTexture >= 0;
+        const std::string name = "TEXCOORD_" + std::to_string(textured ? mMaterialTexCoord[material] : 0);
+        if (auto uv = primitive.attributes.find(name); uv != primitive.attributes.end()) {
+            std::size_t n = 0;
             int components = 0;
-            const std::vector<double> positions =
-                mDecoder.readAccessor(position->second, {3}, true, &vertexCount, &components);
+            uvs = mDecoder.readAccessor(uv->second, {2}, true, &n, &components);
+            if (n != vertexCount) throw InputError(mFile, name + " count differs from POSITION count", where);
+        } else if (textured) {
+            warnOnce(where + ": textured material without " + name + "; texture unused here");
+        }
+        return uvs;
+    }
 
-            std::vector<double> normals;
-            if (auto normal = primitive.attributes.find("NORMAL"); normal != primitive.attributes.end()) {
-                std::size_t n = 0;
-                normals = mDecoder.readAccessor(normal->second, {3}, true, &n, &components);
-                if (n != vertexCount) throw InputError(mFile, "NORMAL count differs from POSITION count", where);
+    std::vector<std::array<std::uint32_t, 3>> trianglesByMode(int mode, const std::vector<std::uint32_t>& corners,
+                                                              const std::string& where) {
+        std::vector<std::array<std::uint32_t, 3>> triangles;
+        if (mode == TINYGLTF_MODE_TRIANGLES) {
+            if (corners.size() % 3) warnOnce(where + ": index count not a multiple of 3, extra indices ignored");
+            for (std::size_t i = 0; i + 2 < corners.size(); i += 3) triangles.push_back({corners[i], corners[i + 1], corners[i + 2]});
+        } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+            for (std::size_t i = 0; i + 2 < corners.size(); ++i) {
+                if (i % 2 == 0) triangles.push_back({corners[i], corners[i + 1], corners[i + 2]});
+                else triangles.push_back({corners[i + 1], corners[i], corners[i + 2]});
             }
-            const int material = materialIndex(primitive.material, where);
-            // UVs: the set the base-colour texture samples, else TEXCOORD_0, kept either way.
-            std::vector<double> uvs;
-            {
-                const bool textured = mOut.materials[std::size_t(material)].baseColorTexture >= 0;
-                const std::string name = "TEXCOORD_" + std::to_string(textured ? mMaterialTexCoord[material] : 0);
-                if (auto uv = primitive.attributes.find(name); uv != primitive.attributes.end()) {
-                    std::size_t n = 0;
-                    uvs = mDecoder.readAccessor(uv->second, {2}, true, &n, &components);
-                    if (n != vertexCount) throw InputError(mFile, name + " count differs from POSITION count", where);
-                } else if (textured) {
-                    warnOnce(where + ": textured material without " + name + "; texture unused here");
-                }
-            }
-            // Corner indices, then triangles by mode.
-            std::vector<std::uint32_t> corners;
-            if (primitive.indices >= 0) {
-                corners = mDecoder.readIndices(primitive.indices);
-            } else {
-                corners.resize(vertexCount);
-                for (std::size_t i = 0; i < vertexCount; ++i) corners[i] = std::uint32_t(i);
-            }
-            std::vector<std::array<std::uint32_t, 3>> triangles;
-            if (primitive.mode == TINYGLTF_MODE_TRIANGLES) {
-                if (corners.size() % 3) warnOnce(where + ": index count not a multiple of 3, extra indices ignored");
-                for (std::size_t i = 0; i + 2 < corners.size(); i += 3)
-                    triangles.push_back({corners[i], corners[i + 1], corners[i + 2]});
-            } else if (primitive.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
-                for (std::size_t i = 0; i + 2 < corners.size(); ++i) {
-                    if (i % 2 == 0) triangles.push_back({corners[i], corners[i + 1], corners[i + 2]});
-                    else triangles.push_back({corners[i + 1], corners[i], corners[i + 2]});
-                }
-            } else {
-                for (std::size_t i = 1; i + 1 < corners.size(); ++i)
-                    triangles.push_back({corners[0], corners[i], corners[i + 1]});
-            }
-            if (mOut.triangles.size() + triangles.size() > mOptions.maxTriangles)
-                throw InputError(mFile, "more than " + std::to_string(mOptions.maxTriangles) +
-                                            " triangles (see --max-triangles)", where);
+        } else {
+            for (std::size_t i = 1; i + 1 < corners.size(); ++i) triangles.push_back({corners[0], corners[i], corners[i + 1]});
+        }
+        return triangles;
+    }
 
-            // Append the transformed vertices and the triangles (offset, winding fixed).
-            const std::size_t base = mOut.positions.size();
-            if (base + vertexCount > std::numeric_limits<std::uint32_t>::max())
-                throw InputError(mFile, "more than 2^32 vertices", where);
-            const bool anyNormals = !normals.empty() || !mOut.normals.empty();
-            const bool anyUvs = !uvs.empty() || !mOut.uvs.empty();
-            if (anyNormals && mOut.normals.size() < base) mOut.normals.resize(base, Eigen::Vector3f::Zero());
-            if (anyUvs && mOut.uvs.size() < base) mOut.uvs.resize(base, Eigen::Vector2f::Zero());
-            for (std::size_t i = 0; i < vertexCount; ++i) {
-                const Eigen::Vector4d p(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2], 1.0);
-                mOut.positions.push_back((world * p).head<3>().cast<float>());
-                if (anyNormals) {
-                    Eigen::Vector3f n = Eigen::Vector3f::Zero();
-                    if (!normals.empty()) {
-                        const Eigen::Vector3d source(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-                        const Eigen::Vector3d transformed = normalMatrix * source;
-                        const double length = transformed.norm();
-                        if (std::isfinite(length) && length > 0) n = (transformed / length).cast<float>();
-                    }
-                    mOut.normals.push_back(n);
+    // The primitive's vertices, transformed; normals and UVs are kept for every vertex once any
+    // primitive has them (zero where one has not).
+    void appendVertices(const Instance& instance, const std::vector<double>& positions, const std::vector<double>& normals,
+                        const std::vector<double>& uvs, std::size_t vertexCount) {
+        const std::size_t base = mOut.positions.size();
+        const bool anyNormals = !normals.empty() || !mOut.normals.empty();
+        const bool anyUvs = !uvs.empty() || !mOut.uvs.empty();
+        if (anyNormals && mOut.normals.size() < base) mOut.normals.resize(base, Eigen::Vector3f::Zero());
+        if (anyUvs && mOut.uvs.size() < base) mOut.uvs.resize(base, Eigen::Vector2f::Zero());
+        for (std::size_t i = 0; i < vertexCount; ++i) {
+            const Eigen::Vector4d p(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2], 1.0);
+            mOut.positions.push_back((instance.world * p).head<3>().cast<float>());
+            if (anyNormals) {
+                Eigen::Vector3f n = Eigen::Vector3f::Zero();
+                if (!normals.empty()) {
+                    const Eigen::Vector3d source(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
+                    const Eigen::Vector3d transformed = instance.normalMatrix * source;
+                    const double length = transformed.norm();
+                    if (std::isfinite(length) && length > 0) n = (transformed / length).cast<float>();
                 }
-                if (anyUvs)
-                    mOut.uvs.push_back(uvs.empty() ? Eigen::Vector2f::Zero()
-                                                   : Eigen::Vector2f(float(uvs[2 * i]), float(uvs[2 * i + 1])));
+                mOut.normals.push_back(n);
             }
-            for (auto t : triangles) {
-                bool valid = true;
-                for (std::uint32_t v : t) valid &= (v < vertexCount);
-                if (!valid) {
-                    if (!mOptions.dropInvalidFaces) {
-                        const auto bad = std::max({t[0], t[1], t[2]});
-                        throw InputError(mFile, "index " + std::to_string(bad) + " out of range (" +
-                                                    std::to_string(vertexCount) + " vertices)",
-                                         where + ".indices");
-                    }
-                    ++mOut.repairs.invalidIndexFaces;
-                    continue;
+            if (anyUvs)
+                mOut.uvs.push_back(uvs.empty() ? Eigen::Vector2f::Zero() : Eigen::Vector2f(float(uvs[2 * i]), float(uvs[2 * i + 1])));
+        }
+    }
+
+    // The triangles, offset by `base` and with the winding fixed; one with an index past the
+    // primitive's vertices is an error, or dropped and counted with --drop-invalid-faces.
+    void appendTriangles(const std::vector<std::array<std::uint32_t, 3>>& triangles, std::size_t base, std::size_t vertexCount,
+                         const Instance& instance, int material, const std::string& where) {
+        for (auto t : triangles) {
+            bool valid = true;
+            for (std::uint32_t v : t) valid &= (v < vertexCount);
+            if (!valid) {
+                if (!mOptions.dropInvalidFaces) {
+                    const auto bad = std::max({t[0], t[1], t[2]});
+                    throw InputError(mFile, "index " + std::to_string(bad) + " out of range (" + std::to_string(vertexCount) + " vertices)",
+                                     where + ".indices");
                 }
-                if (mirrored) std::swap(t[1], t[2]);
-                mOut.triangles.push_back({std::uint32_t(base + t[0]), std::uint32_t(base + t[1]),
-                                          std::uint32_t(base + t[2])});
-                mOut.triangleMaterials.push_back(std::uint32_t(material));
-                mOut.triangleGroups.push_back(group);
+                ++mOut.repairs.invalidIndexFaces;
+                continue;
             }
+            if (instance.mirrored) std::swap(t[1], t[2]);
+            mOut.triangles.push_back({std::uint32_t(base + t[0]), std::uint32_t(base + t[1]), std::uint32_t(base + t[2])});
+            mOut.triangleMaterials.push_back(std::uint32_t(material));
+            mOut.triangleGroups.push_back(instance.group);
         }
     }
 
