@@ -192,6 +192,16 @@ TEST(ReflectanceKernel, IsCloseToTheReference) {
 
 namespace {
 
+// R diag(σ²) Rᵀ for a random rotation R (quaternion components from `n`), σ = `sigma`, or where
+// that is zero a random one, (10^a, 10^b, 1) with a, b drawn by `logRatio`.
+SggxMatrix randomEllipsoid(const Eigen::Vector3d& sigma, std::normal_distribution<double>& n,
+                           std::uniform_real_distribution<double>& logRatio, std::mt19937& rng) {
+    const Eigen::Matrix3d r = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+    const Eigen::Vector3d axes =
+        sigma.isZero() ? Eigen::Vector3d(std::pow(10.0, logRatio(rng)), std::pow(10.0, logRatio(rng)), 1) : sigma;
+    return toSggx(r * axes.cwiseAbs2().asDiagonal() * r.transpose());
+}
+
 // Mean |fast − paper| / mean paper of the specular factor over `count` random rotations and
 // light/view pairs of the ellipsoid with σ = `sigma` (a random σ per case if sigma is zero:
 // ratios 1 to 1e-3), the paper's integration at 96 cells per axis as the truth.
@@ -201,10 +211,7 @@ double specularErrorAgainstThePaper(const Eigen::Vector3d& sigma, double shinine
     std::uniform_real_distribution<double> logRatio(-3, 0);
     double error = 0, scale = 0;
     for (int k = 0; k < count; ++k) {
-        const Eigen::Matrix3d r = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
-        const Eigen::Vector3d axes =
-            sigma.isZero() ? Eigen::Vector3d(std::pow(10.0, logRatio(rng)), std::pow(10.0, logRatio(rng)), 1) : sigma;
-        const SggxMatrix m = toSggx(r * axes.cwiseAbs2().asDiagonal() * r.transpose());
+        const SggxMatrix m = randomEllipsoid(sigma, n, logRatio, rng);
         const Eigen::Vector3d l = randomDirection(rng), v = randomDirection(rng);
         const double paper = reflectanceReference(m, l, v, shininess, cells).specular;
         error += std::abs(reflectanceFast(m, l, v, shininess).specular - paper);
@@ -428,10 +435,7 @@ TEST(ReflectanceKernel, DiffuseMeetsItsGoalOnEveryFamily) {
         const int count = 200;
         std::vector<double> fast, paper;
         for (int k = 0; k < count; ++k) {
-            const Eigen::Matrix3d r = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
-            const Eigen::Vector3d axes =
-                sigma.isZero() ? Eigen::Vector3d(std::pow(10.0, logRatio(rng)), std::pow(10.0, logRatio(rng)), 1) : sigma;
-            const SggxMatrix m = toSggx(r * axes.cwiseAbs2().asDiagonal() * r.transpose());
+            const SggxMatrix m = randomEllipsoid(sigma, n, logRatio, rng);
             const Eigen::Vector3d l = randomDirection(rng), v = randomDirection(rng);
             fast.push_back(reflectanceFast(m, l, v, 20).diffuse);
             paper.push_back(reflectanceReference(m, l, v, 20, 64).diffuse);
