@@ -137,31 +137,37 @@ double percentile95(std::vector<double> x) {
     return x[std::size_t(0.95 * double(x.size() - 1))];
 }
 
-/// The 95th percentile of |estimate − truth| / mean(truth), and over `resamples` bootstrap draws
-/// of the cases (the family's mean drawn with them) the 5th and 95th percentiles of that figure.
-struct Percentile {
-    double value, low, high;
-};
-Percentile errorPercentile(const std::vector<double>& estimate, const std::vector<double>& truth, int resamples = 1000) {
-    const auto figure = [&](const std::vector<std::size_t>& pick) {
-        double mean = 0;
-        for (const std::size_t i : pick) mean += truth[i] / double(pick.size());
-        std::vector<double> e;
-        for (const std::size_t i : pick) e.push_back(std::abs(estimate[i] - truth[i]) / mean);
-        return percentile95(std::move(e));
-    };
-    std::vector<std::size_t> pick(truth.size());
-    for (std::size_t i = 0; i < pick.size(); ++i) pick[i] = i;
-    const double value = figure(pick);
+double meanOf(const std::vector<double>& x) {
+    double mean = 0;
+    for (const double v : x) mean += v / double(x.size());
+    return mean;
+}
+
+/// Mean and 95th percentile of |x − truth| / mean(truth).
+std::pair<double, double> errors(const std::vector<double>& x, const std::vector<double>& truth) {
+    const double mean = meanOf(truth);
+    std::vector<double> e;
+    for (std::size_t i = 0; i < x.size(); ++i) e.push_back(std::abs(x[i] - truth[i]) / mean);
+    return {meanOf(e), percentile95(e)};
+}
+
+/// The 5th and 95th percentiles of errors(estimate, truth)'s 95th percentile over `resamples`
+/// bootstrap draws of the cases (the family's mean drawn with them).
+std::pair<double, double> percentileInterval(const std::vector<double>& estimate, const std::vector<double>& truth,
+                                             int resamples = 1000) {
     std::mt19937 rng(11);
     std::uniform_int_distribution<std::size_t> any(0, truth.size() - 1);
-    std::vector<double> draws;
+    std::vector<double> draws, x(truth.size()), t(truth.size());
     for (int r = 0; r < resamples; ++r) {
-        for (std::size_t& i : pick) i = any(rng);
-        draws.push_back(figure(pick));
+        for (std::size_t k = 0; k < truth.size(); ++k) {
+            const std::size_t i = any(rng);
+            x[k] = estimate[i];
+            t[k] = truth[i];
+        }
+        draws.push_back(errors(x, t).second);
     }
     std::sort(draws.begin(), draws.end());
-    return {value, draws[std::size_t(0.05 * (resamples - 1))], draws[std::size_t(0.95 * (resamples - 1))]};
+    return {draws[std::size_t(0.05 * (resamples - 1))], draws[std::size_t(0.95 * (resamples - 1))]};
 }
 
 /// One family at one shininess: the cases' light and view drawn in order from `rng` and `g` (so that the
@@ -200,30 +206,16 @@ Estimates estimate(const std::vector<M>& shapes, double n, std::mt19937& rng, st
     return e;
 }
 
-/// Mean and 95th percentile of |x − truth| / mean(truth).
-std::pair<double, double> errors(const std::vector<double>& x, const std::vector<double>& truth) {
-    double mean = 0, meanError = 0;
-    for (double t : truth) mean += t / double(truth.size());
-    std::vector<double> e;
-    for (std::size_t i = 0; i < x.size(); ++i) {
-        e.push_back(std::abs(x[i] - truth[i]) / mean);
-        meanError += e.back() / double(x.size());
-    }
-    return {meanError, percentile95(e)};
-}
-
 void printRow(const char* first, const char* family, const Estimates& e, bool lattice) {
-    double mean = 0;
-    for (double t : e.truth) mean += t / double(e.truth.size());
     const auto [fm, fp] = errors(e.fast, e.truth);
     const auto [pm, pp] = errors(e.paper, e.truth);
-    const Percentile interval = errorPercentile(e.fast, e.truth);
-    std::printf("%9s %-14s %8.4f | ", first, family, mean);
+    const auto [low, high] = percentileInterval(e.fast, e.truth);
+    std::printf("%9s %-14s %8.4f | ", first, family, meanOf(e.truth));
     if (lattice) {
         const auto [lm, lp] = errors(e.lattice, e.truth);
         std::printf("%6.3f / %6.3f | ", lm, lp);
     }
-    std::printf("%6.3f / %6.3f [%5.3f, %5.3f] | %6.3f / %6.3f\n", fm, fp, interval.low, interval.high, pm, pp);
+    std::printf("%6.3f / %6.3f [%5.3f, %5.3f] | %6.3f / %6.3f\n", fm, fp, low, high, pm, pp);
 }
 
 }  // namespace
