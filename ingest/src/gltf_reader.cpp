@@ -335,6 +335,15 @@ private:
         return result;
     }
 
+    // Where a mesh instance puts its primitives: its transform, the normals' (the inverse
+    // transpose), whether it mirrors (winding flipped), the faces' group.
+    struct Instance {
+        Eigen::Matrix4d world;
+        Eigen::Matrix3d normalMatrix;
+        bool mirrored;
+        std::uint32_t group;
+    };
+
     void addMesh(int meshIndex, const Eigen::Matrix4d& world) {
         const auto& mesh = mModel.meshes[std::size_t(meshIndex)];
         const Eigen::Matrix3d linear = world.topLeftCorner<3, 3>();
@@ -349,15 +358,6 @@ private:
             addPrimitive(mesh.primitives[p], "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(p) + "]",
                          instance);
     }
-
-    // Where a mesh instance puts its primitives: its transform, the normals' (the inverse
-    // transpose), whether it mirrors (winding flipped), the faces' group.
-    struct Instance {
-        Eigen::Matrix4d world;
-        Eigen::Matrix3d normalMatrix;
-        bool mirrored;
-        std::uint32_t group;
-    };
 
     // The mesh's name is its faces' group (a base mesh's faces take texels by it).
     std::uint32_t groupOf(int meshIndex) {

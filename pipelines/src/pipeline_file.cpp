@@ -87,16 +87,6 @@ void readSlurmSettings(TomlReader& reader, const toml::table& t, SlurmSettings& 
         if (value.find_first_of("\n\r") != std::string::npos) reader.fail("slurm.sbatch_args", "an argument holds a line break");
 }
 
-}  // namespace
-
-std::size_t sceneTexelIndex(const render::Scene& scene, const std::string& name) {
-    for (std::size_t i = 0; i < scene.texels.size(); ++i)
-        if (scene.texels[i].name == name) return i;
-    throw InputError(scene.file, "the pipeline binds texel '" + name + "', which the scene does not define");
-}
-
-namespace {
-
 // One [[source]] table (`path` names it in messages): a pattern or a file, the options the
 // source reads and no other.
 SourceStep readSource(TomlReader& reader, const toml::table& t, const std::string& path, std::set<std::string>& sourceNames) {
@@ -235,6 +225,12 @@ CompareStep readCompare(TomlReader& reader, const toml::table& t, const std::str
 }
 
 }  // namespace
+
+std::size_t sceneTexelIndex(const render::Scene& scene, const std::string& name) {
+    for (std::size_t i = 0; i < scene.texels.size(); ++i)
+        if (scene.texels[i].name == name) return i;
+    throw InputError(scene.file, "the pipeline binds texel '" + name + "', which the scene does not define");
+}
 
 Pipeline loadPipeline(const fs::path& file) {
     const std::string text = readInputFile(file, std::uint64_t(64) << 20, "pipeline file");
