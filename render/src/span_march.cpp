@@ -109,24 +109,54 @@ int SpanMarcher::constantShadowLevel(SpanContext& span) const {
     return span.shadowLevel;
 }
 
+double SpanMarcher::shadowQuery(SpanContext& span, std::size_t i, const Vec3& lw, double distance, VoxelPoint& point,
+                                bool record, int& reuseAt, Counters& counters) const {
+    SpanContext::ShadowTrack& track = span.tracks[i];
+    if (!record)
+        if (const int nearest = nearestRecorded(track, point.s, span.shareDistance, reuseAt); nearest >= 0)
+            return track.t[std::size_t(nearest)];
+    const SpanContext::Light& light = span.lights[i];
+    const double width = shadowWidth(span, point.s);
+    const Vec3 rc = point.cell();
+    double shadow;
+    if (light.latticeSlot >= 0) {
+        const ShadowQueries::SpanFrame frame{light.lr, span.scale, constantShadowLevel(span)};
+        shadow = mShadows.nearAndCachedShadow(light.latticeSlot, span.prim, rc, lw, width, counters, &frame);
+    } else {
+        shadow = mShadows.shadowTransmittance(point.world(), lw, distance, width, &span.prim, rc, counters);
+    }
+    if (record && track.count < SpanContext::kTrackCapacity) {
+        track.s[std::size_t(track.count)] = point.s;
+        track.t[std::size_t(track.count)] = shadow;
+        ++track.count;
+    }
+    return shadow;
+}
+
+primitive::ReflectanceFactors SpanMarcher::reflectance(const SpanContext::Light& light, const Material& m,
+                                                       const primitive::SggxMatrix& s, const Vec3& lr,
+                                                       const Vec3& view) const {
+    if (light.kernel) return (*light.kernel)(s);
+    if (mOptions.shading == ShadingMode::Fast) return primitive::reflectanceFast(s, lr, view, m.shininess, 16, hasSpecular(m));
+    return primitive::reflectanceReference(s, lr, view, m.shininess, mOptions.referenceSamples);
+}
+
 SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double blendWeight, Counters& counters) const {
     SpanResult r;
     const std::size_t lights = mScene.lights.size();
     PerLight<MarchLight> state(lights);
-    const TexelRuntime& texel = span.texel;
-    const Material& m = texel.material;
+    const Material& m = span.texel.material;
     const Vec3 view = -span.dir;
     const double shadowRefresh = std::clamp(mOptions.approximations.shadowRefresh, 1e-6, 1.0);
     const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
     double reusedShare = 0;
-    const double tau = texel.tauAt(level);
-    counters.voxels += detail::march(*texel.volume, level, span.p0, span.dir, span.length,
+    const double tau = span.texel.tauAt(level);
+    counters.voxels += detail::march(*span.texel.volume, level, span.p0, span.dir, span.length,
         [&](const GridVoxel& voxel, double s, double ds) {
-            const primitive::SggxMatrix& sMatrix = voxel.s;
-            const double sigma = tau * double(voxel.density) * sMatrix.projectedArea(span.dir);
             // 1 − exp rather than expm1 (which takes 1.7× as long here): the opacity is only
             // added to and multiplied with quantities of order one, where its absolute error (an
             // ulp of 1) is what counts.
+            const double sigma = tau * double(voxel.density) * voxel.s.projectedArea(span.dir);
             const double transmit = std::exp(-sigma * ds);
             const double alpha = 1 - transmit;
             if (!(alpha > 0)) return true;
@@ -134,56 +164,22 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
             // with a tiny share of the pixel takes the march's last reflectance for its light.
             const double share = span.startT * r.transmittance * alpha * blendWeight;
             const bool reuse = share < reuseWeight && reusedShare + share <= ApproximationBudget::kReflectanceReuseBudget * reuseWeight;
-            const double sm = s + 0.5 * ds;
-            // The voxel's cell coordinates and world point: for point lights and shadow queries.
-            const auto cellPoint = [&] {
-                return span.prim.map.toCell(span.p0 + sm * span.dir);
-            };
-            Vec3 x = Vec3::Zero();
-            bool haveX = false;
-            const auto worldPoint = [&]() -> const Vec3& {
-                if (!haveX) x = span.prim.cell.map(cellPoint());
-                haveX = true;
-                return x;
-            };
-            if (span.anyPointLight) worldPoint();
+            VoxelPoint point(span, s + 0.5 * ds);
+            if (span.anyPointLight) point.world();
             const Color albedo(voxel.albedo[0], voxel.albedo[1], voxel.albedo[2]);
             Color lk = m.ambient.cwiseProduct(albedo);
             for (std::size_t i = 0; i < lights; ++i) {
                 const SpanContext::Light& sl = span.lights[i];
                 MarchLight& ml = state[i];
-                Vec3 lw;
+                Vec3 lw = sl.lw;
                 double distance = std::numeric_limits<double>::infinity();
-                Color e;
-                if (sl.directional) {
-                    lw = sl.lw;
-                    e = sl.e;
-                } else if (!lightAt(mScene.lights[i], x, lw, distance, e)) {
-                    continue;
-                }
+                Color e = sl.e;
+                if (!sl.directional && !lightAt(mScene.lights[i], point.world(), lw, distance, e)) continue;
                 // A shadow query at the first lit voxel, another each time the march's
                 // transmittance has fallen below shadowRefresh of what it was at the last one
                 // (1, the default: at every absorbing voxel).
                 if (!ml.shadowValid || r.transmittance < shadowRefresh * ml.shadowAt) {
-                    SpanContext::ShadowTrack& track = span.tracks[i];
-                    const int nearest = record ? -1 : nearestRecorded(track, sm, span.shareDistance, ml.reuseAt);
-                    if (nearest >= 0) {
-                        ml.shadow = track.t[std::size_t(nearest)];
-                    } else {
-                        const double width = shadowWidth(span, sm);
-                        const Vec3 rc = cellPoint();
-                        if (sl.latticeSlot >= 0) {
-                            const ShadowQueries::SpanFrame frame{sl.lr, span.scale, constantShadowLevel(span)};
-                            ml.shadow = mShadows.nearAndCachedShadow(sl.latticeSlot, span.prim, rc, lw, width, counters, &frame);
-                        } else {
-                            ml.shadow = mShadows.shadowTransmittance(worldPoint(), lw, distance, width, &span.prim, rc, counters);
-                        }
-                        if (record && track.count < SpanContext::kTrackCapacity) {
-                            track.s[std::size_t(track.count)] = sm;
-                            track.t[std::size_t(track.count)] = ml.shadow;
-                            ++track.count;
-                        }
-                    }
+                    ml.shadow = shadowQuery(span, i, lw, distance, point, record, ml.reuseAt, counters);
                     ml.shadowAt = r.transmittance;
                     ml.shadowValid = true;
                 }
@@ -194,10 +190,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                     reusedShare += share;
                 } else {
                     ++counters.reflectance;
-                    ml.reflectance = sl.kernel ? (*sl.kernel)(sMatrix)
-                                     : mOptions.shading == ShadingMode::Fast
-                                         ? primitive::reflectanceFast(sMatrix, lr, view, m.shininess, 16, hasSpecular(m))
-                                         : primitive::reflectanceReference(sMatrix, lr, view, m.shininess, mOptions.referenceSamples);
+                    ml.reflectance = reflectance(sl, m, voxel.s, lr, view);
                     ml.haveReflectance = true;
                 }
                 const primitive::ReflectanceFactors& f = ml.reflectance;

@@ -72,6 +72,25 @@ struct SpanContext {
     PerLight<ShadowTrack> tracks;
 };
 
+/// Where a voxel of a march is shaded: its middle, s along the span, as cell coordinates and,
+/// made on first use (point lights and exact shadow rays need it), as a world point.
+class VoxelPoint {
+public:
+    VoxelPoint(const SpanContext& span, double s) : s(s), mSpan(span) {}
+    Vec3 cell() const { return mSpan.prim.map.toCell(mSpan.p0 + s * mSpan.dir); }
+    const Vec3& world() {
+        if (!mHaveWorld) mWorld = mSpan.prim.cell.map(cell());
+        mHaveWorld = true;
+        return mWorld;
+    }
+    const double s;
+
+private:
+    const SpanContext& mSpan;
+    Vec3 mWorld = Vec3::Zero();
+    bool mHaveWorld = false;
+};
+
 class SpanMarcher {
 public:
     SpanMarcher(const Scene& scene, const RenderOptions& options, const ShadowQueries& shadows, double coneSpread)
@@ -84,6 +103,16 @@ public:
     SpanResult march(SpanContext& span, int level, bool record, double blendWeight, Counters& counters) const;
 
 private:
+    /// Light i's transmittance at `point`: a query the span's first march recorded within
+    /// SpanContext::shareDistance (unless this march records; `reuseAt` resumes the scan of the
+    /// track), otherwise a new query (ShadowQueries), recorded when `record`.
+    double shadowQuery(SpanContext& span, std::size_t i, const Vec3& lw, double distance, VoxelPoint& point,
+                       bool record, int& reuseAt, Counters& counters) const;
+    /// The Phong reflectance factors (material m) of the ellipsoid S lit along lr (unit, tiled
+    /// reference space) and seen along `view`: the light's kernel where the span made one,
+    /// otherwise the shading mode's method.
+    primitive::ReflectanceFactors reflectance(const SpanContext::Light& light, const Material& m,
+                                              const primitive::SggxMatrix& s, const Vec3& lr, const Vec3& view) const;
     /// The shadow queries' cone width (world units) at s along the span.
     double shadowWidth(const SpanContext& span, double s) const;
     /// SpanContext::shadowLevel, chosen on first use: the level is chosen once per span instead of
