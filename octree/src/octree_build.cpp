@@ -98,6 +98,67 @@ Range pointRange(const VoxelData& d) {
     return Range{d.density, d.density, s, s, d.albedo, d.albedo};
 }
 
+// The voxels of the finest level L that a block of `level` at Morton `key` covers.
+VoxelBox blockExtent(std::uint64_t key, std::uint32_t level, std::uint32_t L) {
+    const auto c = mortonDecode(key);
+    const std::uint32_t shift = L - level;
+    VoxelBox b;
+    for (int a = 0; a < 3; ++a) {
+        b.min[a] = c[a] << shift;
+        b.max[a] = (c[a] + 1) << shift;
+    }
+    return b;
+}
+
+bool within(const VoxelBox& b, const VoxelBox& r) {
+    for (int a = 0; a < 3; ++a)
+        if (b.min[a] < r.min[a] || b.max[a] > r.max[a]) return false;
+    return true;
+}
+
+bool apart(const VoxelBox& b, const VoxelBox& r) {
+    for (int a = 0; a < 3; ++a)
+        if (b.max[a] <= r.min[a] || b.min[a] >= r.max[a]) return true;
+    return false;
+}
+
+// The finest level's blocks with `region` given over to `fresh` (OctreeBuilder::updateRegion):
+// blocks outside it kept, blocks inside it dropped, straddling blocks split until each piece is
+// inside or outside. Returns the dirty box: the region grown over the straddling blocks, whose
+// representation changes.
+VoxelBox spliceRegion(std::vector<VolumeBlock>& blocks, const VoxelBox& region, std::vector<VolumeBlock> fresh,
+                      std::uint32_t L) {
+    VoxelBox dirty = region;
+    std::vector<VolumeBlock> kept;
+    kept.reserve(blocks.size() + fresh.size());
+    std::vector<VolumeBlock> stack;
+    for (const auto& b : blocks) {
+        const VoxelBox extent = blockExtent(b.key, b.level, L);
+        if (apart(extent, region)) {
+            kept.push_back(b);
+            continue;
+        }
+        if (within(extent, region)) continue;
+        for (int a = 0; a < 3; ++a) {
+            dirty.min[a] = std::min(dirty.min[a], extent.min[a]);
+            dirty.max[a] = std::max(dirty.max[a], extent.max[a]);
+        }
+        stack.push_back(b);
+        while (!stack.empty()) {
+            const VolumeBlock piece = stack.back();
+            stack.pop_back();
+            const VoxelBox e = blockExtent(piece.key, piece.level, L);
+            if (apart(e, region)) kept.push_back(piece);
+            else if (!within(e, region))
+                for (std::uint64_t c = 0; c < 8; ++c)
+                    stack.push_back(VolumeBlock{(piece.key << 3) | c, std::uint8_t(piece.level + 1), piece.flags, piece.data});
+        }
+    }
+    for (auto& b : fresh) kept.push_back(b);
+    blocks = std::move(kept);
+    return dirty;
+}
+
 }  // namespace
 
 struct OctreeBuilder::Impl {
@@ -463,66 +524,18 @@ void OctreeBuilder::updateRegion(const VoxelBox& region, std::vector<VolumeBlock
     for (int a = 0; a < 3; ++a)
         if (region.max[a] > n || region.min[a] > region.max[a])
             throw std::invalid_argument("updateRegion: region outside the volume");
-    auto extentOf = [L](std::uint64_t key, std::uint32_t level) {
-        const auto c = mortonDecode(key);
-        const std::uint32_t s = L - level;
-        VoxelBox b;
-        for (int a = 0; a < 3; ++a) {
-            b.min[a] = c[a] << s;
-            b.max[a] = (c[a] + 1) << s;
-        }
-        return b;
-    };
-    auto inside = [](const VoxelBox& b, const VoxelBox& r) {
-        for (int a = 0; a < 3; ++a)
-            if (b.min[a] < r.min[a] || b.max[a] > r.max[a]) return false;
-        return true;
-    };
-    auto disjoint = [](const VoxelBox& b, const VoxelBox& r) {
-        for (int a = 0; a < 3; ++a)
-            if (b.max[a] <= r.min[a] || b.min[a] >= r.max[a]) return true;
-        return false;
-    };
     for (const auto& b : blocks)
-        if (b.level > L || !inside(extentOf(b.key, b.level), region))
+        if (b.level > L || !within(blockExtent(b.key, b.level, L), region))
             throw std::invalid_argument("updateRegion: a new block lies outside the region");
 
-    // The new finest level: blocks outside the region kept, straddling blocks split, new ones in.
-    // The dirty box D also covers the straddling blocks, whose representation changes.
-    VoxelBox dirty = region;
-    std::vector<VolumeBlock> kept;
-    kept.reserve(m.volume.blocks.size() + blocks.size());
-    std::vector<VolumeBlock> stack;
-    for (const auto& b : m.volume.blocks) {
-        const VoxelBox extent = extentOf(b.key, b.level);
-        if (disjoint(extent, region)) {
-            kept.push_back(b);
-            continue;
-        }
-        if (inside(extent, region)) continue;
-        for (int a = 0; a < 3; ++a) {
-            dirty.min[a] = std::min(dirty.min[a], extent.min[a]);
-            dirty.max[a] = std::max(dirty.max[a], extent.max[a]);
-        }
-        stack.push_back(b);
-        while (!stack.empty()) {
-            const VolumeBlock piece = stack.back();
-            stack.pop_back();
-            const VoxelBox e = extentOf(piece.key, piece.level);
-            if (disjoint(e, region)) kept.push_back(piece);
-            else if (!inside(e, region))
-                for (std::uint64_t c = 0; c < 8; ++c)
-                    stack.push_back(VolumeBlock{(piece.key << 3) | c, std::uint8_t(piece.level + 1), piece.flags, piece.data});
-        }
-    }
-    for (auto& b : blocks) kept.push_back(b);
-    m.volume.blocks = std::move(kept);
+    // The new finest level; the dirty box D.
+    const VoxelBox dirty = spliceRegion(m.volume.blocks, region, std::move(blocks), L);
     m.volume.sortBlocks();
 
     // New source nodes inside D, per level.
     std::vector<Level> sources(L + 1);
     for (const auto& b : m.volume.blocks)
-        if (!disjoint(extentOf(b.key, b.level), dirty))
+        if (!apart(blockExtent(b.key, b.level, L), dirty))
             sources[b.level].push_back(sourceNode(b));
 
     progress.start("refilter", L + 1);
