@@ -43,10 +43,14 @@ void appendFan(RawMesh& out, const std::vector<std::uint32_t>& corners, const fs
 // made the next face 4·10⁹ corners long (out of memory); after a failed extraction ("nan") it
 // carries on with the vertex count as every face's corner count. Read from a stream it also
 // never parses the header line, so it ignores "NOFF" and "BINARY".
-RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
-    // Line by line: the keyword ([ST][C][N]OFF) alone on the first line, then exactly three
-    // counts on one line (the fuzzer found that "OFF 0 0" made two readers disagree).
-    Tokens tokens(bytes);
+struct OffHeader {
+    bool hasNormals = false;
+    std::uint64_t vertices = 0, faces = 0;
+};
+
+// Line by line: the keyword ([ST][C][N]OFF) alone on the first line, then exactly three counts
+// on one line (the fuzzer found that "OFF 0 0" made two readers disagree).
+OffHeader readOffHeader(Tokens& tokens, std::size_t fileBytes, const fs::path& file, const IngestOptions& options) {
     Tokens magicLine(tokens.line());
     const std::string_view magic = magicLine.next();
     if (magic.size() < 3 || magic.substr(magic.size() - 3) != "OFF")
@@ -56,33 +60,35 @@ RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOption
     std::string_view prefix = magic.substr(0, magic.size() - 3);
     if (prefix.substr(0, 2) == "ST") prefix.remove_prefix(2);
     if (prefix.substr(0, 1) == "C") prefix.remove_prefix(1);
-    const bool hasNormals = prefix == "N";
-    if (!prefix.empty() && !hasNormals) throw InputError(file, "not an OFF file (keyword '" + std::string(magic.substr(0, 40)) + "')");
+    OffHeader header;
+    header.hasNormals = prefix == "N";
+    if (!prefix.empty() && !header.hasNormals) throw InputError(file, "not an OFF file (keyword '" + std::string(magic.substr(0, 40)) + "')");
     const std::string_view extra = magicLine.next();
     if (extra == "BINARY") throw InputError(file, "binary OFF is not supported");
     if (!extra.empty()) throw InputError(file, "OFF header: the keyword must be alone on its line");
     Tokens countLine(tokens.line());
-    std::uint64_t vertices = 0, faces = 0, edges = 0;
-    if (!parseCount(countLine.next(), vertices) || !parseCount(countLine.next(), faces) ||
+    std::uint64_t edges = 0;
+    if (!parseCount(countLine.next(), header.vertices) || !parseCount(countLine.next(), header.faces) ||
         !parseCount(countLine.next(), edges) || !countLine.next().empty())
         throw InputError(file, "OFF header: bad vertex/face/edge counts");
     // Each vertex takes at least "0 0 0\n" (6 bytes), each face "3 0 0 0\n" (8 bytes).
-    const std::uint64_t available = bytes.size();
+    const std::uint64_t available = fileBytes, vertices = header.vertices, faces = header.faces;
     if (vertices > available / 6 || faces > available / 8 || vertices * 6 + faces * 8 > available)
         throw InputError(file, "OFF header claims " + std::to_string(vertices) + " vertices and " +
                                    std::to_string(faces) + " faces, more than the file's " +
                                    std::to_string(available) + " bytes can hold");
     if (faces > options.maxTriangles)
         throw InputError(file, "more than " + std::to_string(options.maxTriangles) + " faces (see --max-triangles)");
+    return header;
+}
 
-    RawMesh out;
-    out.format = "off";
-    out.positions.reserve(vertices);
-    if (hasNormals) out.normals.reserve(vertices);
-    // A vertex line: x y z, then nx ny nz for NOFF, then anything numeric (a colour, texture
-    // coordinates), which is not kept.
-    const int wanted = hasNormals ? 6 : 3;
-    for (std::uint64_t v = 0; v < vertices; ++v) {
+// A vertex line: x y z, then nx ny nz for NOFF, then anything numeric (a colour, texture
+// coordinates), which is not kept.
+void readOffVertices(Tokens& tokens, const OffHeader& header, const fs::path& file, RawMesh& out) {
+    out.positions.reserve(header.vertices);
+    if (header.hasNormals) out.normals.reserve(header.vertices);
+    const int wanted = header.hasNormals ? 6 : 3;
+    for (std::uint64_t v = 0; v < header.vertices; ++v) {
         const std::string_view record = tokens.line();
         if (record.empty() && tokens.done()) throw InputError(file, "truncated OFF: missing vertices");
         Tokens fields(record);
@@ -95,26 +101,30 @@ RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOption
         }
         if (count < wanted)
             throw InputError(file, "OFF vertex " + std::to_string(v) + ": fewer than " + std::to_string(wanted) +
-                                       (hasNormals ? " numbers (NOFF: a position and a normal)" : " coordinates"));
+                                       (header.hasNormals ? " numbers (NOFF: a position and a normal)" : " coordinates"));
         out.positions.emplace_back(values[0], values[1], values[2]);
-        if (hasNormals) out.normals.emplace_back(values[3], values[4], values[5]);
+        if (header.hasNormals) out.normals.emplace_back(values[3], values[4], values[5]);
     }
-    // A face line: a corner count, that many vertex indices in range, then numbers (a colour).
+}
+
+// A face line: a corner count, that many vertex indices in range, then numbers (a colour).
+void readOffFaces(Tokens& tokens, const OffHeader& header, const fs::path& file, const IngestOptions& options,
+                  RawMesh& out) {
     std::vector<std::uint32_t> corners;
-    for (std::uint64_t f = 0; f < faces; ++f) {
+    for (std::uint64_t f = 0; f < header.faces; ++f) {
         std::string_view record = tokens.line();
         if (record.empty() && tokens.done()) throw InputError(file, "truncated OFF: missing faces");
         Tokens face(record);
         std::uint64_t count = 0;
         if (!parseCount(face.next(), count))
             throw InputError(file, "OFF face " + std::to_string(f) + ": bad corner count");
-        if (count > vertices || count > record.size())
+        if (count > header.vertices || count > record.size())
             throw InputError(file, "OFF face " + std::to_string(f) + " claims " + std::to_string(count) +
                                        " corners, more than the file holds");
         corners.clear();
         for (std::uint64_t k = 0; k < count; ++k) {
             std::uint64_t index = 0;
-            if (!parseCount(face.next(), index) || index >= vertices)
+            if (!parseCount(face.next(), index) || index >= header.vertices)
                 throw InputError(file, "OFF face " + std::to_string(f) + ": bad or out-of-range vertex index");
             corners.push_back(std::uint32_t(index));
         }
@@ -122,6 +132,15 @@ RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOption
             if (!parseDecimal<float>(t)) throw InputError(file, "OFF face " + std::to_string(f) + ": bad number '" + std::string(t.substr(0, 40)) + "'");
         appendFan(out, corners, file, options);
     }
+}
+
+RawMesh readOff(std::string_view bytes, const fs::path& file, const IngestOptions& options) {
+    Tokens tokens(bytes);
+    const OffHeader header = readOffHeader(tokens, bytes.size(), file, options);
+    RawMesh out;
+    out.format = "off";
+    readOffVertices(tokens, header, file, out);
+    readOffFaces(tokens, header, file, options, out);
     if (out.triangles.empty()) throw InputError(file, "no faces");
     return out;
 }
