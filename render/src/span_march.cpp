@@ -68,10 +68,7 @@ SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const
     if (!jtInv.allFinite()) jtInv = Mat3::Identity();
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
         Light& sl = lights[i];
-        if (scene.lights[i].type != LightType::Directional) {
-            anyPointLight = true;
-            continue;
-        }
+        if (scene.lights[i].type != LightType::Directional) continue;
         double distance;
         sl.directional = true;
         lightAt(scene.lights[i], Vec3::Zero(), sl.lw, distance, sl.e);
@@ -165,7 +162,6 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
             const double share = span.startT * r.transmittance * alpha * blendWeight;
             const bool reuse = share < reuseWeight && reusedShare + share <= ApproximationBudget::kReflectanceReuseBudget * reuseWeight;
             VoxelPoint point(span, s + 0.5 * ds);
-            if (span.anyPointLight) point.world();
             const Color albedo(voxel.albedo[0], voxel.albedo[1], voxel.albedo[2]);
             Color lk = m.ambient.cwiseProduct(albedo);
             for (std::size_t i = 0; i < lights; ++i) {

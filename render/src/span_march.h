@@ -63,7 +63,6 @@ struct SpanContext {
     Mat3 jtInv;            ///< world → tiled reference directions at the span's middle
     /// A second march takes a recorded shadow query within this distance (one coarse voxel).
     double shareDistance = 1;
-    bool anyPointLight = false;
     /// The shadow queries' level along the whole span, once a march has chosen it (the span's
     /// other march takes it too): −1 where it changes along the span (chosen per query), −2 not
     /// chosen yet (SpanMarcher::constantShadowLevel).
