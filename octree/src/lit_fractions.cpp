@@ -20,8 +20,10 @@ using detail::mix64;
 using detail::Segments;
 
 // The point of the chord at which its optical depth (∫ρÂ · scale) reaches `target`; the chord's
-// end where it never does (rounding).
-Vec3 pointAtDepth(const Octree& tree, std::uint32_t level, const Segments& segments, double scale, double target) {
+// end where it never does (rounding). Inside a profiled voxel the density is taken as its mean
+// over the segment's heights: the renderer shades such a voxel at its segment's middle, too.
+Vec3 pointAtDepth(const Octree& tree, const VerticalProfile& profile, std::uint32_t level, const Segments& segments,
+                  double scale, double target) {
     double depth = 0;
     std::optional<Vec3> found;
     for (const auto& segment : segments) {
@@ -30,7 +32,8 @@ Vec3 pointAtDepth(const Octree& tree, std::uint32_t level, const Segments& segme
         const Vec3 w = (segment.second - a).normalized();
         forEachVoxelOnSegment(tree, level, a, segment.second, [&](const OctreeNode& node, double t0, double t1) {
             if (found) return;
-            const double sigma = scale * detail::voxelExtinction(node, w);
+            const double sigma = scale * detail::voxelExtinction(node, w) *
+                                 profile.meanFactor(int(level), a.z() + t0 * w.z(), a.z() + t1 * w.z());
             if (sigma > 0 && depth + sigma * (t1 - t0) >= target) found = a + (t0 + (target - depth) / sigma) * w;
             else depth += sigma * (t1 - t0);
         });
@@ -66,6 +69,7 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
     const auto firstShadow = [](std::size_t c) { return c == 0 ? std::size_t(0) : c - 1; };
     const auto measured = [&](std::size_t c, std::size_t l) { return !wanted || wanted(c, l); };
     std::vector<ChordLight> traced(static_cast<std::size_t>(chords));
+    const VerticalProfile profile(tree);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, traced.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j != r.end(); ++j) {
             ChordRng rng{mix64(seed ^ mix64(0x117ull + std::uint64_t(j)))};
@@ -84,13 +88,13 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
             t.shadow.assign(cameraEnd * levels, 0.0);
             for (std::size_t c = 0; c < cameraEnd; ++c) {
                 const double scale = tau * scales[c];
-                const double alpha = 1 - std::exp(-scale * chordDepth(tree, std::uint32_t(c), chord));
+                const double alpha = 1 - std::exp(-scale * chordDepth(tree, profile, std::uint32_t(c), chord));
                 t.opacity[c] = alpha;
                 if (!(alpha > 0)) continue;
                 // Inverse-CDF sampling of the weight T·σ: the depth d at which 1 − e^−d = u·α.
-                const Segments ray = toTheTop(pointAtDepth(tree, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha)), light);
+                const Segments ray = toTheTop(pointAtDepth(tree, profile, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha)), light);
                 for (std::size_t l = firstShadow(c); l < shadowEnd; ++l)
-                    if (measured(c, l)) t.shadow[c * levels + l] = std::exp(-tau * scales[l] * chordDepth(tree, std::uint32_t(l), ray));
+                    if (measured(c, l)) t.shadow[c * levels + l] = std::exp(-tau * scales[l] * chordDepth(tree, profile, std::uint32_t(l), ray));
             }
         }
     });

@@ -139,14 +139,34 @@ struct MarchVolume::Slot {
     std::atomic<const LevelGrid*> ready{nullptr};
 };
 
-MarchVolume::MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGridLevel) : mTree(std::move(tree)) {
+struct MarchVolume::ProfileSlot {
+    std::once_flag once;
+    octree::VerticalProfile profile;
+    std::atomic<bool> ready{false};
+};
+
+MarchVolume::MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGridLevel)
+    : mTree(std::move(tree)), mProfile(std::make_unique<ProfileSlot>()) {
     if (mTree) mTree->loadLevels(0);
     if (mTree && !mTree->levels.empty() && !mTree->levels[0].empty()) mMaxLevel = std::min(int(mTree->levels.size()) - 1, 30);
     mMaxGridLevel = std::clamp(maxGridLevel, -1, std::min(mMaxLevel, LevelGrid::kMaxLevel));
     if (mMaxGridLevel >= 0) mSlots = std::make_unique<Slot[]>(std::size_t(mMaxGridLevel + 1));
+    // VerticalProfile profiles levels 0 … min(kProfileLevel, deepest) − log2(kMinLayers).
+    for (int layers = 1 << std::min(octree::VerticalProfile::kProfileLevel, std::max(mMaxLevel, 0));
+         layers >= octree::VerticalProfile::kMinLayers; layers /= 2)
+        ++mProfiledLevels;
 }
 
 MarchVolume::~MarchVolume() = default;
+
+const octree::VerticalProfile* MarchVolume::measuredProfile(int level) const {
+    if (!mProfile->ready.load(std::memory_order_acquire))
+        std::call_once(mProfile->once, [&] {
+            mProfile->profile = octree::VerticalProfile(*mTree);
+            mProfile->ready.store(true, std::memory_order_release);
+        });
+    return mProfile->profile.profiles(level) ? &mProfile->profile : nullptr;
+}
 
 const LevelGrid* MarchVolume::grid(int level) const {
     if (level < 0 || level > mMaxGridLevel) return nullptr;
@@ -193,8 +213,9 @@ SegmentTransmittance marchTransmittance(const MarchVolume& volume, double tau, c
     const Eigen::Vector3d dir = delta / length;
     double opticalDepth = 0;
     const double maxDepth = cutoff > 0 ? -std::log(cutoff) : INFINITY;
-    out.blocks = detail::march(volume, level, from, dir, length, [&](const GridVoxel& voxel, double, double ds) {
-        opticalDepth += tau * voxel.density * voxel.s.projectedArea(dir) * ds;
+    const detail::ProfileFactor profile(volume, level, from, dir);
+    out.blocks = detail::march(volume, level, from, dir, length, [&](const GridVoxel& voxel, double s, double ds) {
+        opticalDepth += tau * voxel.density * voxel.s.projectedArea(dir) * ds * profile(s, ds);
         return opticalDepth < maxDepth;
     });
     out.transmittance = std::exp(-opticalDepth);

@@ -173,6 +173,25 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
     return steps;
 }
 
+/// What a march of `volume` at `level` multiplies a voxel's extinction by over the segment
+/// p0 + s·dir, s ∈ [s0, s0 + ds]: the level's vertical profile's mean factor over the segment's
+/// heights (octree::VerticalProfile), 1 on a level whose voxels are uniform.
+class ProfileFactor {
+public:
+    ProfileFactor(const MarchVolume& volume, int level, const Eigen::Vector3d& p0, const Eigen::Vector3d& dir)
+        : mLevel(std::clamp(level, 0, std::max(volume.maxLevel(), 0))), mProfile(volume.profile(mLevel)), mZ(p0.z()),
+          mDz(dir.z()) {}
+    bool uniform() const { return mProfile == nullptr; }
+    double operator()(double s0, double ds) const {
+        return mProfile ? mProfile->meanFactor(mLevel, mZ + s0 * mDz, mZ + (s0 + ds) * mDz) : 1.0;
+    }
+
+private:
+    int mLevel;
+    const octree::VerticalProfile* mProfile;
+    double mZ, mDz;
+};
+
 /// The march of `volume` at `level` (clamped to its deepest): through the level's grid, or block
 /// by block through the octree beyond the deepest grid. Same contract as marchGrid.
 template <class Visit>

@@ -148,12 +148,13 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
     const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
     double reusedShare = 0;
     const double tau = span.texel.tauAt(level);
+    const ProfileFactor profile(*span.texel.volume, level, span.p0, span.dir);
     counters.voxels += detail::march(*span.texel.volume, level, span.p0, span.dir, span.length,
         [&](const GridVoxel& voxel, double s, double ds) {
             // 1 − exp rather than expm1 (which takes 1.7× as long here): the opacity is only
             // added to and multiplied with quantities of order one, where its absolute error (an
             // ulp of 1) is what counts.
-            const double sigma = tau * double(voxel.density) * voxel.s.projectedArea(span.dir);
+            const double sigma = tau * double(voxel.density) * voxel.s.projectedArea(span.dir) * profile(s, ds);
             const double transmit = std::exp(-sigma * ds);
             const double alpha = 1 - transmit;
             if (!(alpha > 0)) return true;

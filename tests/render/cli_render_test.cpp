@@ -12,13 +12,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path makeSceneDir(const std::string& name, const std::string& cameraExtra = "") {
+// A scene of two patches carrying a texel of 2^levels voxels a side: stripes of spheres in the
+// bottom 11/16 of its height.
+fs::path makeSceneDir(const std::string& name, const std::string& cameraExtra = "", int levels = 4) {
     const fs::path dir = fs::path(VTEX_TEST_TMP) / "cli" / name;
     fs::remove_all(dir);
     fs::create_directories(dir / "meshes");
     std::ofstream(dir / "meshes" / "plane.obj") << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 2 0 0.5\nv 3 0 0.5\nv 3 2 0.5\nv 2 2 0.5\nf 1 2 3 4\nf 5 6 7 8\n";
-    const auto tree = test::makeOctree(4, [](int x, int y, int z) -> std::optional<vtex::octree::VoxelData> {
-        if ((x + y) % 3 != 0 || z > 10) return std::nullopt;
+    const int n = 1 << levels;
+    const auto tree = test::makeOctree(levels, [n](int x, int y, int z) -> std::optional<vtex::octree::VoxelData> {
+        if ((x + y) % 3 != 0 || z * 16 > 10 * n) return std::nullopt;
         return test::sphereVoxel(40, {0.2f, 0.7f, 0.2f});
     }, true);
     vtex::octree::writeVto(*tree, dir / "t.vto");
@@ -199,8 +202,10 @@ void flipByteOf(const fs::path& file, const std::string& tag) {
 // `vtex render` reads each level of a .vto when a ray first uses it (octree::openVto): a damaged
 // level no ray uses does not stop it, a damaged level it uses fails cleanly mid-render (exit 3,
 // naming the file and the section, no image), and stats.json says how much of the file it read.
+// A texel of 128³ voxels: its coarse levels take their vertical profile from level 6
+// (octree::VerticalProfile), so a view that marches them reads levels 0 … 6, not level 7.
 TEST(RenderCli, ReadsOnlyTheLevelsItUsesAndADamagedUsedLevelExitsThree) {
-    const fs::path dir = makeSceneDir("lazy");
+    const fs::path dir = makeSceneDir("lazy", "", 7);
     const std::string original = vtex::test::readText(dir / "t.vto");
     const auto render = [&](const std::string& name) {
         return runVtex({"render", (dir / "scene.toml").string(), "-o", (dir / (name + ".exr")).string(), "--stats",
@@ -213,14 +218,14 @@ TEST(RenderCli, ReadsOnlyTheLevelsItUsesAndADamagedUsedLevelExitsThree) {
     EXPECT_EQ(statsNumber(stats, "vto_file_bytes"), original.size());
     // The deepest level read: the one whose section ends where the bytes read do.
     int deepest = -1;
-    for (int l = 0; l <= 4; ++l) {
+    for (int l = 0; l <= 7; ++l) {
         const auto [offset, size] = sectionSpan(original, "LV0" + std::to_string(l));
         if (offset + size == read) deepest = l;
     }
     ASSERT_GE(deepest, 1) << stats;  // some level is read during the render, not at load
-    ASSERT_LT(deepest, 4) << stats;
+    ASSERT_LT(deepest, 7) << stats;
 
-    flipByteOf(dir / "t.vto", "LV04");  // unused
+    flipByteOf(dir / "t.vto", "LV07");  // unused
     const auto unused = render("unused");
     ASSERT_EQ(unused.exitStatus, 0) << unused.err;
     EXPECT_EQ(vtex::test::readText(dir / "unused.exr"), vtex::test::readText(dir / "clean.exr"));
@@ -236,10 +241,10 @@ TEST(RenderCli, ReadsOnlyTheLevelsItUsesAndADamagedUsedLevelExitsThree) {
     EXPECT_FALSE(fs::exists(dir / "damaged.exr"));
     // vtex inspect still checks every section at once, the unused one too.
     std::ofstream(dir / "t.vto", std::ios::binary | std::ios::trunc) << original;
-    flipByteOf(dir / "t.vto", "LV04");
+    flipByteOf(dir / "t.vto", "LV07");
     const auto inspect = runVtex({"inspect", (dir / "t.vto").string()});
     EXPECT_EQ(inspect.exitStatus, 3) << inspect.err;
-    EXPECT_NE((inspect.out + inspect.err).find("LV04"), std::string::npos) << inspect.out << inspect.err;
+    EXPECT_NE((inspect.out + inspect.err).find("LV07"), std::string::npos) << inspect.out << inspect.err;
 }
 
 // --rows A:B writes those rows of the image, exactly as the whole render has them, and says which
