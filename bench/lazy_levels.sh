@@ -29,8 +29,8 @@ sys.path.insert(0, sys.argv[1])
 import bush_field as b
 b.write_ground()
 for view in b.VIEWS:
-    scene = b.SCENE % (b.CAMERAS[view] + b.LOOK_AT + (int(sys.argv[2]), int(sys.argv[3]), 'bush', 'bush'))
-    open(view + '-source.toml', 'w').write(scene)
+    b.write_scene(view + '-source.toml', b.CAMERAS[view], int(sys.argv[2]), int(sys.argv[3]))
+    scene = open(view + '-source.toml').read()
     open(view + '.toml', 'w').write(scene.replace('source   = "bush.glb"\n', ''))
 EOF
 printf '%-8s %-9s %-6s %-10s %8s %8s %12s %12s\n' binary renderer view source load_s wall_s bytes_read file_bytes

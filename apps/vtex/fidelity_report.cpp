@@ -1,6 +1,9 @@
 #include "fidelity_report.h"
 #include "json_number.h"
 
+#include <vtex/octree/vertical_profile.h>
+
+#include <algorithm>
 #include <cstdio>
 
 namespace vtex::cli {
@@ -17,6 +20,7 @@ nlohmann::json fidelityJson(const render::SourceFidelity& m, std::uint32_t l) {
             {"transmittance", jsonNumber(c.transmittance)},
             {"error", jsonNumber(c.error())},
             {"fitted", fitted},
+            {"vertical_profile", int(l) < m.profiledLevels},
             {"beams", {{"mean", jsonNumber(b.mean)}, {"mean_abs", jsonNumber(b.meanAbs)}, {"p95_abs", jsonNumber(b.p95Abs)},
                        {"noise", jsonNumber(b.noise)}}}};
 }
@@ -43,6 +47,10 @@ void printFidelity(const render::SourceFidelity& m, const std::filesystem::path&
     if (!m.fitted.empty())
         out << "fitted: each level's densities times the factor the renderer fits (--level-fit on), over "
             << render::kLevelFitChords << " shell chords, then the same random chords\n";
+    if (m.profiledLevels > 0)
+        out << "levels 0-" << m.profiledLevels - 1 << ": each voxel's density varies with height as level "
+            << std::min<int>(octree::VerticalProfile::kProfileLevel, int(m.chords.size()) - 1)
+            << "'s layer means do (the vertical profile)\n";
 }
 
 }  // namespace vtex::cli

@@ -72,6 +72,9 @@ struct SourceFidelity {
     std::vector<octree::BeamError> beams;
     std::vector<double> fitScale;
     std::vector<octree::ChordTransmittance> fitted;
+    /// Levels 0 … profiledLevels − 1 carry the texel's vertical profile (octree::VerticalProfile),
+    /// in every figure above.
+    int profiledLevels = 0;
 };
 SourceFidelity measureSourceFidelity(const octree::Octree& tree, const ingest::TriangleMesh& source);
 
