@@ -4,7 +4,6 @@
 #include <vtex/octree/chord_transmittance.h>
 
 #include <algorithm>
-#include <cmath>
 
 namespace vtex::octree {
 namespace {
@@ -31,7 +30,7 @@ std::vector<double> layerMeans(const Octree& tree, int level) {
 VerticalProfile::VerticalProfile(const Octree& tree) {
     if (tree.levels.empty()) return;
     const int level = std::min(kProfileLevel, int(tree.levelCount()) - 1);
-    const int profiled = level - int(std::log2(double(kMinLayers))) + 1;  // levels 0 … profiled − 1
+    const int profiled = profiledLevels(level);
     if (profiled <= 0) return;
     tree.loadLevels(std::uint32_t(level));
     if (tree.levels[0].empty()) return;

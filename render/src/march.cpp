@@ -151,10 +151,7 @@ MarchVolume::MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGrid
     if (mTree && !mTree->levels.empty() && !mTree->levels[0].empty()) mMaxLevel = std::min(int(mTree->levels.size()) - 1, 30);
     mMaxGridLevel = std::clamp(maxGridLevel, -1, std::min(mMaxLevel, LevelGrid::kMaxLevel));
     if (mMaxGridLevel >= 0) mSlots = std::make_unique<Slot[]>(std::size_t(mMaxGridLevel + 1));
-    // VerticalProfile profiles levels 0 … min(kProfileLevel, deepest) − log2(kMinLayers).
-    for (int layers = 1 << std::min(octree::VerticalProfile::kProfileLevel, std::max(mMaxLevel, 0));
-         layers >= octree::VerticalProfile::kMinLayers; layers /= 2)
-        ++mProfiledLevels;
+    mProfiledLevels = mMaxLevel >= 0 ? octree::VerticalProfile::profiledLevels(mMaxLevel) : 0;
 }
 
 MarchVolume::~MarchVolume() = default;

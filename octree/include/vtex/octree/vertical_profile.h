@@ -17,6 +17,7 @@
 
 #include <vtex/octree/octree.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -33,6 +34,13 @@ public:
     /// meets it (−0.004) and the bush field's far and mid views, which march levels 3–5, keep
     /// their images and times.
     static constexpr int kMinLayers = 16;
+
+    /// How many levels (0 … n − 1) a tree whose deepest level is `deepest` profiles.
+    static constexpr int profiledLevels(int deepest) {
+        int n = 0;
+        for (int layers = 1 << std::clamp(deepest, 0, kProfileLevel); layers >= kMinLayers; layers /= 2) ++n;
+        return n;
+    }
 
     /// None: every factor is 1.
     VerticalProfile() = default;
