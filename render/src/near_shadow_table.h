@@ -135,7 +135,9 @@ public:
                                       std::uint32_t(std::clamp(f[2], 0.0, n - 1))};
         exit = std::clamp(exit, 0.0, step);
         const std::uint32_t cell = grid.cell(idx[0], idx[1], idx[2]);
-        const double own = cell & LevelGrid::kEmpty ? 0.0 : sigma(grid.voxels[cell], tau, s.lr) * exit;
+        const double own = cell & LevelGrid::kEmpty ? 0.0
+                                                     : sigma(grid.voxels[cell], tau, s.lr) * exit *
+                                                           ProfileFactor(volume, level, p0, s.lr)(0, exit);
         if (!(step > exit) || face < 0) return std::exp(-own);
         // The rest from where on the face the query leaves (fractions of the voxel along the
         // face's other two axes).
@@ -245,7 +247,8 @@ private:
             const std::uint32_t cell = grid.cell(std::uint32_t(std::int64_t(std::floor(end.x() * n)) & mask),
                                                  std::uint32_t(std::int64_t(std::floor(end.y() * n)) & mask),
                                                  std::uint32_t(std::clamp(std::floor(end.z() * n), 0.0, n - 1)));
-            if (!(cell & LevelGrid::kEmpty)) endSigma = sigma(grid.voxels[cell], tau, s.lr);
+            // At a profiled level, the extinction at the end point's height.
+            if (!(cell & LevelGrid::kEmpty)) endSigma = sigma(grid.voxels[cell], tau, s.lr) * ProfileFactor(volume, level, end, s.lr)(0, 0);
         }
         values[0].store(float(endSigma), std::memory_order_relaxed);
         for (int k = kSide * kSide - 1; k >= 1; --k) values[1 + k].store(float(t[std::size_t(k)]), std::memory_order_relaxed);

@@ -115,8 +115,7 @@ public:
     // `grid`: the level's grid, when there is a slot.
     int nearTableSlot(int slot, int primIndex, const TexelRuntime& texel, const Vec3& lr, int level,
                       const LevelGrid*& grid) const {
-        // A profiled level marches: the table's own-voxel step takes its voxel as uniform.
-        if (mNearSlots.empty() || level > NearShadowTable::kMaxLevel || texel.volume->profile(level)) return -1;
+        if (mNearSlots.empty() || level > NearShadowTable::kMaxLevel) return -1;
         const int table = mNearSlots[std::size_t(primIndex) * mLightCache.lights() + std::size_t(slot)];
         if (table < 0 || !NearShadowTable::same(mNearTable.slot(table).lr, lr)) return -1;
         grid = texel.volume->grid(level);

@@ -43,12 +43,12 @@ std::shared_ptr<const vtex::octree::Octree> layered() {
 // By hand: level 0's voxel spans the 64 layers of level 6 and holds density 2 in a quarter of
 // them, so its mean is ½ and p = 4 on the slab, 0 off it; a level-1 voxel spans 32 layers, the
 // lower one half full (p = 2 on the slab), the upper one empty (uniform); a level-2 voxel spans
-// 16 layers, all full or all empty (p ≡ 1); level 3 is not profiled.
+// 16 layers and a level-3 voxel 8, all full or all empty (p ≡ 1); level 4 is not profiled.
 TEST(VerticalProfile, KeepsEachVoxelsMassAndPutsItWhereTheLayersHaveIt) {
     const VerticalProfile p(*slab(6));
     EXPECT_TRUE(p.profiles(0));
-    EXPECT_TRUE(p.profiles(2));
-    EXPECT_FALSE(p.profiles(3));
+    EXPECT_TRUE(p.profiles(3));
+    EXPECT_FALSE(p.profiles(4));
     EXPECT_NEAR(p.meanFactor(0, 0, 1), 1, 1e-12);
     EXPECT_NEAR(p.meanFactor(0, 0.25, 0.5), 4, 1e-12);
     EXPECT_NEAR(p.meanFactor(0, 0.5, 0.25), 4, 1e-12);  // either order
@@ -65,47 +65,51 @@ TEST(VerticalProfile, KeepsEachVoxelsMassAndPutsItWhereTheLayersHaveIt) {
     EXPECT_NEAR(p.meanFactor(1, 0, 0.25), 0, 1e-12);
     EXPECT_NEAR(p.meanFactor(1, 0.6, 0.9), 1, 1e-12);  // an empty voxel stays uniform
     EXPECT_NEAR(p.meanFactor(2, 0.3, 0.4), 1, 1e-12);
-    EXPECT_EQ(p.meanFactor(3, 0.3, 0.4), 1);
+    EXPECT_NEAR(p.meanFactor(3, 0.3, 0.4), 1, 1e-12);
+    EXPECT_EQ(p.meanFactor(4, 0.3, 0.4), 1);
     // Heights outside the texel count as its top or floor; NaN as the floor.
     EXPECT_NEAR(p.meanFactor(0, -1, 0.25), 0, 1e-12);
     EXPECT_NEAR(p.meanFactor(0, 0.3, std::numeric_limits<double>::quiet_NaN()), 4 * 0.05 / 0.3, 1e-12);
-    // A texel of 16³ voxels profiles level 0 alone (16 layers); one of 8³ nothing.
+    // A texel of 16³ voxels profiles levels 0–1 (16 and 8 layers); one of 8³ level 0; one of 4³
+    // nothing.
     const VerticalProfile small(*slab(4));
-    EXPECT_TRUE(small.profiles(0));
-    EXPECT_FALSE(small.profiles(1));
+    EXPECT_TRUE(small.profiles(1));
+    EXPECT_FALSE(small.profiles(2));
     EXPECT_NEAR(small.meanFactor(0, 0.25, 0.5), 4, 1e-12);
-    EXPECT_FALSE(VerticalProfile(*slab(3)).profiles(0));
+    EXPECT_TRUE(VerticalProfile(*slab(3)).profiles(0));
+    EXPECT_FALSE(VerticalProfile(*slab(3)).profiles(1));
+    EXPECT_FALSE(VerticalProfile(*slab(2)).profiles(0));
     EXPECT_FALSE(VerticalProfile().profiles(0));
 }
 
 // A texel uniform across and layered in height: each profiled coarse voxel's density is its
 // layers' mean in each layer, the finest level's own density. So along any segment the
-// renderer's march of levels 0–2 must give level 6's optical depth (two walks of different grids,
+// renderer's march of levels 0–3 must give level 6's optical depth (two walks of different grids,
 // one through the profile's cumulative sums), and the octree's chord measure the same
-// transmittance at levels 0–2 as at level 6; level 3, whose voxels stay uniform over 8 layers,
+// transmittance at levels 0–3 as at level 6; level 4, whose voxels stay uniform over 4 layers,
 // must not.
 TEST(VerticalProfile, ProfiledCoarseLevelsOfALayeredTexelAreItsFinestLevel) {
     const auto tree = layered();
     const vtex::render::MarchVolume volume(tree);
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> unit(0, 1);
-    double level3Differs = 0;
+    double level4Differs = 0;
     for (int i = 0; i < 200; ++i) {
         const Eigen::Vector3d a(unit(rng), unit(rng), unit(rng)), b(unit(rng), unit(rng), unit(rng));
         const double fine = -std::log(vtex::render::marchTransmittance(volume, 0.05, a, b, 6).transmittance);
-        for (int level = 0; level <= 2; ++level) {
+        for (int level = 0; level <= 3; ++level) {
             const double coarse = -std::log(vtex::render::marchTransmittance(volume, 0.05, a, b, level).transmittance);
             EXPECT_NEAR(coarse, fine, 1e-9 * (1 + fine)) << "level " << level << ", segment " << i;
         }
-        level3Differs = std::max(level3Differs, std::abs(-std::log(vtex::render::marchTransmittance(volume, 0.05, a, b, 3).transmittance) - fine));
+        level4Differs = std::max(level4Differs, std::abs(-std::log(vtex::render::marchTransmittance(volume, 0.05, a, b, 4).transmittance) - fine));
     }
-    EXPECT_GT(level3Differs, 0.01);
+    EXPECT_GT(level4Differs, 0.01);
     const auto nothing = [](const Eigen::Vector3d&, const Eigen::Vector3d&) { return true; };
     const auto chords = vtex::octree::measureChordTransmittance(*tree, nothing, 0.05, 512);
     ASSERT_EQ(chords.size(), 7u);
-    for (int level = 0; level <= 2; ++level)
+    for (int level = 0; level <= 3; ++level)
         EXPECT_NEAR(chords[std::size_t(level)].transmittance, chords[6].transmittance, 1e-9) << "level " << level;
-    EXPECT_GT(std::abs(chords[3].transmittance - chords[6].transmittance), 1e-6);
+    EXPECT_GT(std::abs(chords[4].transmittance - chords[6].transmittance), 1e-6);
 }
 
 // The camera march carries the profile: a slab texel seen edge-on from a camera in the shell, at

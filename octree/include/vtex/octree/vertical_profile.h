@@ -28,12 +28,13 @@ public:
     /// The level whose layer means the profile keeps (capped at the texel's finest).
     static constexpr int kProfileLevel = 6;
     /// A level is profiled where one voxel spans at least this many of the profile's layers
-    /// (levels 0–2 of a texel of 64³ voxels or more). Measured on the 256³ bush
-    /// (bench/vtex_chord_families): at levels 0–2 the uniform voxel misses issue 13's chord goal
-    /// (−0.04, −0.04, −0.02) and the profile halves it; at level 3 (8 layers) the uniform voxel
-    /// meets it (−0.004) and the bush field's far and mid views, which march levels 3–5, keep
-    /// their images and times.
-    static constexpr int kMinLayers = 16;
+    /// (levels 0–3 of a texel of 64³ voxels or more). Measured on the 256³ bush
+    /// (bench/vtex_chord_families, bench/bush_field.sh): at levels 0–2 the uniform voxel misses
+    /// issue 13's chord goal (−0.04, −0.04, −0.02) and the profile halves it; at level 3 it
+    /// takes the bush field's far RMSE from 0.00276 to 0.00268 at no measurable cost; profiling
+    /// levels 4–5 too (2 layers a voxel) would cost the far and middle views 5–7 % of their time
+    /// for RMSEs 0.4–0.5 % lower.
+    static constexpr int kMinLayers = 8;
 
     /// How many levels (0 … n − 1) a tree whose deepest level is `deepest` profiles.
     static constexpr int profiledLevels(int deepest) {
