@@ -1,7 +1,7 @@
 #include "fidelity_report.h"
 #include "json_number.h"
 
-#include <vtex/octree/vertical_profile.h>
+#include <vtex/octree/density_profile.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -21,9 +21,17 @@ nlohmann::json fidelityJson(const render::SourceFidelity& m, std::uint32_t l) {
             {"error", jsonNumber(c.error())},
             {"fitted", fitted},
             {"vertical_profile", int(l) < m.profiledLevels},
+            {"across_profile", int(l) < m.profiledAcrossLevels},
             {"beams", {{"mean", jsonNumber(b.mean)}, {"mean_abs", jsonNumber(b.meanAbs)}, {"p95_abs", jsonNumber(b.p95Abs)},
                        {"noise", jsonNumber(b.noise)}}}};
 }
+
+namespace {
+
+// "level 0" or "levels 0-N": the first n levels.
+std::string levelsUpTo(int n) { return n == 1 ? std::string("level 0") : "levels 0-" + std::to_string(n - 1); }
+
+}  // namespace
 
 void printFidelity(const render::SourceFidelity& m, const std::filesystem::path& source, std::ostream& out) {
     if (m.chords.empty()) return;
@@ -47,10 +55,13 @@ void printFidelity(const render::SourceFidelity& m, const std::filesystem::path&
     if (!m.fitted.empty())
         out << "fitted: each level's densities times the factor the renderer fits (--level-fit on), over "
             << render::kLevelFitChords << " shell chords, then the same random chords\n";
+    const int profileLevel = std::min<int>(octree::DensityProfile::kProfileLevel, int(m.chords.size()) - 1);
     if (m.profiledLevels > 0)
-        out << "levels 0-" << m.profiledLevels - 1 << ": each voxel's density varies with height as level "
-            << std::min<int>(octree::VerticalProfile::kProfileLevel, int(m.chords.size()) - 1)
-            << "'s layer means do (the vertical profile)\n";
+        out << levelsUpTo(m.profiledLevels) << ": each voxel's density varies with height as level "
+            << profileLevel << "'s layer means do (the vertical profile)\n";
+    if (m.profiledAcrossLevels > 0)
+        out << levelsUpTo(m.profiledAcrossLevels) << ": and across, as level " << profileLevel
+            << "'s column means in x and in y do (the profile across)\n";
 }
 
 }  // namespace vtex::cli

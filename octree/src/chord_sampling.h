@@ -6,7 +6,7 @@
 #pragma once
 
 #include <vtex/octree/octree.h>
-#include <vtex/octree/vertical_profile.h>
+#include <vtex/octree/density_profile.h>
 #include <vtex/octree/voxel.h>
 
 #include "hash.h"
@@ -105,10 +105,10 @@ inline double voxelExtinction(const OctreeNode& node, const Vec3& w) {
 
 /// The optical depth ∫ρÂ of the segment a → b through `level` of `tree`, its coarse voxels'
 /// densities varying with height as `profile` says (chord_transmittance.cpp).
-double chordDepth(const Octree& tree, const VerticalProfile& profile, std::uint32_t level, const Vec3& a, const Vec3& b);
+double chordDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level, const Vec3& a, const Vec3& b);
 
 /// The same over a chord cut into segments.
-inline double chordDepth(const Octree& tree, const VerticalProfile& profile, std::uint32_t level,
+inline double chordDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level,
                          const Segments& segments) {
     double depth = 0;
     for (const auto& [a, b] : segments) depth += chordDepth(tree, profile, level, a, b);

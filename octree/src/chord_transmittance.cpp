@@ -32,7 +32,7 @@ using detail::randomShellChord;
 
 }  // namespace
 
-double detail::chordDepth(const Octree& tree, const VerticalProfile& profile, std::uint32_t level, const Vec3& a,
+double detail::chordDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level, const Vec3& a,
                           const Vec3& b) {
     double depth = 0;
     const Vec3 delta = b - a;
@@ -41,7 +41,7 @@ double detail::chordDepth(const Octree& tree, const VerticalProfile& profile, st
     const Vec3 w = delta / length;
     const bool profiled = profile.profiles(int(level));
     forEachVoxelOnSegment(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
-        const double f = profiled ? profile.meanFactor(int(level), a.z() + t0 * w.z(), a.z() + t1 * w.z()) : 1.0;
+        const double f = profiled ? profile.meanFactor(int(level), Vec3(a + t0 * w), Vec3(a + t1 * w)) : 1.0;
         depth += voxelExtinction(node, w) * (t1 - t0) * f;
     });
     return depth;
@@ -105,7 +105,7 @@ std::vector<ChordTransmittance> measureChords(const Octree& tree, const ChordVis
     double visibility = 0;
     for (char m : misses) visibility += m;
     visibility /= double(count);
-    const VerticalProfile profile(tree);
+    const DensityProfile profile(tree);
     for (std::size_t level = 0; level < out.size(); ++level) {
         const double tau = tauAt(level);
         std::vector<double> transmittance(count);
@@ -195,7 +195,7 @@ ShellChords traceShellChords(const Octree& tree, const ChordVisibility& visible,
     ShellChords out;
     out.misses.assign(count, 0);
     out.depth.assign(endLevel - firstLevel, std::vector<double>(count, 0.0));
-    const VerticalProfile profile(tree);
+    const DensityProfile profile(tree);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j != r.end(); ++j) {
             ChordRng rng{mix64(seed ^ mix64(0x5E11ull + std::uint64_t(j)))};
@@ -265,7 +265,7 @@ std::vector<BeamError> measureBeamTransmittance(const Octree& tree, const ChordV
     std::vector<BeamError> out(tree.levels.size());
     const int grid = int(std::sqrt(double(std::max(chordsPerBeam, 1))));
     if (beams <= 0 || grid <= 0) return out;
-    const VerticalProfile profile(tree);
+    const DensityProfile profile(tree);
     for (std::size_t level = 0; level < tree.levels.size(); ++level) {
         std::vector<double> error(std::size_t(beams), 0.0), noise(std::size_t(beams), 0.0);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, std::size_t(beams), 4), [&](const tbb::blocked_range<std::size_t>& r) {

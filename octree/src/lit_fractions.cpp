@@ -22,7 +22,7 @@ using detail::Segments;
 // The point of the chord at which its optical depth (∫ρÂ · scale) reaches `target`; the chord's
 // end where it never does (rounding). Inside a profiled voxel the density is taken as its mean
 // over the segment's heights: the renderer shades such a voxel at its segment's middle, too.
-Vec3 pointAtDepth(const Octree& tree, const VerticalProfile& profile, std::uint32_t level, const Segments& segments,
+Vec3 pointAtDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level, const Segments& segments,
                   double scale, double target) {
     double depth = 0;
     std::optional<Vec3> found;
@@ -69,7 +69,7 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
     const auto firstShadow = [](std::size_t c) { return c == 0 ? std::size_t(0) : c - 1; };
     const auto measured = [&](std::size_t c, std::size_t l) { return !wanted || wanted(c, l); };
     std::vector<ChordLight> traced(static_cast<std::size_t>(chords));
-    const VerticalProfile profile(tree);
+    const DensityProfile profile(tree);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, traced.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j != r.end(); ++j) {
             ChordRng rng{mix64(seed ^ mix64(0x117ull + std::uint64_t(j)))};

@@ -141,7 +141,7 @@ struct MarchVolume::Slot {
 
 struct MarchVolume::ProfileSlot {
     std::once_flag once;
-    octree::VerticalProfile profile;
+    octree::DensityProfile profile;
     std::atomic<bool> ready{false};
 };
 
@@ -151,15 +151,15 @@ MarchVolume::MarchVolume(std::shared_ptr<const octree::Octree> tree, int maxGrid
     if (mTree && !mTree->levels.empty() && !mTree->levels[0].empty()) mMaxLevel = std::min(int(mTree->levels.size()) - 1, 30);
     mMaxGridLevel = std::clamp(maxGridLevel, -1, std::min(mMaxLevel, LevelGrid::kMaxLevel));
     if (mMaxGridLevel >= 0) mSlots = std::make_unique<Slot[]>(std::size_t(mMaxGridLevel + 1));
-    mProfiledLevels = mMaxLevel >= 0 ? octree::VerticalProfile::profiledLevels(mMaxLevel) : 0;
+    mProfiledLevels = mMaxLevel >= 0 ? octree::DensityProfile::profiledLevels(mMaxLevel) : 0;
 }
 
 MarchVolume::~MarchVolume() = default;
 
-const octree::VerticalProfile* MarchVolume::measuredProfile(int level) const {
+const octree::DensityProfile* MarchVolume::measuredProfile(int level) const {
     if (!mProfile->ready.load(std::memory_order_acquire))
         std::call_once(mProfile->once, [&] {
-            mProfile->profile = octree::VerticalProfile(*mTree);
+            mProfile->profile = octree::DensityProfile(*mTree);
             mProfile->ready.store(true, std::memory_order_release);
         });
     return mProfile->profile.profiles(level) ? &mProfile->profile : nullptr;

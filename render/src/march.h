@@ -174,22 +174,26 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
 }
 
 /// What a march of `volume` at `level` multiplies a voxel's extinction by over the segment
-/// p0 + s·dir, s ∈ [s0, s0 + ds]: the level's vertical profile's mean factor over the segment's
-/// heights (octree::VerticalProfile), 1 on a level whose voxels are uniform.
+/// p0 + s·dir, s ∈ [s0, s0 + ds]: the level's density profile's mean factor over the segment
+/// (octree::DensityProfile: over its heights, and across where the level is profiled across),
+/// 1 on a level whose voxels are uniform.
 class ProfileFactor {
 public:
     ProfileFactor(const MarchVolume& volume, int level, const Eigen::Vector3d& p0, const Eigen::Vector3d& dir)
-        : mLevel(std::clamp(level, 0, std::max(volume.maxLevel(), 0))), mProfile(volume.profile(mLevel)), mZ(p0.z()),
-          mDz(dir.z()) {}
+        : mLevel(std::clamp(level, 0, std::max(volume.maxLevel(), 0))), mProfile(volume.profile(mLevel)),
+          mAcross(mProfile && mProfile->profilesAcross(mLevel)), mP0(p0), mDir(dir) {}
     bool uniform() const { return mProfile == nullptr; }
     double operator()(double s0, double ds) const {
-        return mProfile ? mProfile->meanFactor(mLevel, mZ + s0 * mDz, mZ + (s0 + ds) * mDz) : 1.0;
+        if (!mProfile) return 1.0;
+        if (mAcross) return mProfile->meanFactor(mLevel, octree::Vec3(mP0 + s0 * mDir), octree::Vec3(mP0 + (s0 + ds) * mDir));
+        return mProfile->meanFactor(mLevel, mP0.z() + s0 * mDir.z(), mP0.z() + (s0 + ds) * mDir.z());
     }
 
 private:
     int mLevel;
-    const octree::VerticalProfile* mProfile;
-    double mZ, mDz;
+    const octree::DensityProfile* mProfile;
+    bool mAcross;
+    Eigen::Vector3d mP0, mDir;
 };
 
 /// The march of `volume` at `level` (clamped to its deepest): through the level's grid, or block

@@ -91,7 +91,9 @@ TEST(SamplerCli, InspectMeasuresEachLevelAgainstTheSource) {
         EXPECT_GE(b["noise"].get<double>(), 0.0);
         EXPECT_LE(b["noise"].get<double>(), 0.5 / 16 + 1e-12);  // 0.5/√256
     }
-    EXPECT_LT(levels[0]["chords_against_source"]["error"].get<double>(), -0.1);
+    // The coarse levels' densities, as stored, are too opaque along the chords (level 0 at 32³:
+    // −0.19 with uniform voxels, −0.06 with its profiles in height and across).
+    EXPECT_LT(levels[0]["chords_against_source"]["error"].get<double>(), -0.03);
     EXPECT_LT(levels[3]["chords_against_source"]["error"].get<double>(), -0.02);
     // The levels as the renderer fits them (issue 13's fix), on the same chords: at least the
     // coarse levels are fitted (up to the faithful levels' finest + 1), each with a positive
@@ -109,15 +111,19 @@ TEST(SamplerCli, InspectMeasuresEachLevelAgainstTheSource) {
         }
     }
     EXPECT_LT(levels[0]["chords_against_source"]["fitted"]["scale"].get<double>(), 1.0);
-    // At 32³ the vertical profile comes from level 5 and levels 0–2 carry it (≥ 8 layers a voxel).
-    for (std::size_t l = 0; l < levels.size(); ++l)
+    // At 32³ the vertical profile comes from level 5 and levels 0–2 carry it (≥ 8 layers a voxel);
+    // level 0 also carries the profile across (≥ 32 columns a voxel).
+    for (std::size_t l = 0; l < levels.size(); ++l) {
         EXPECT_EQ(levels[l]["chords_against_source"]["vertical_profile"].get<bool>(), l < 3) << l;
+        EXPECT_EQ(levels[l]["chords_against_source"]["across_profile"].get<bool>(), l < 1) << l;
+    }
     EXPECT_GT(levels[5]["chords_against_source"]["transmittance"].get<double>(),
               levels[0]["chords_against_source"]["transmittance"].get<double>());
     r = runVtex({"inspect", vto.string(), "--source", glb.string()});
     ASSERT_EQ(r.exitStatus, 0) << r.err;
     EXPECT_NE(r.out.find("against the source"), std::string::npos);
     EXPECT_NE(r.out.find("levels 0-2: each voxel's density varies with height as level 5's"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("level 0: and across, as level 5's column means"), std::string::npos) << r.out;
     // The build reports the same table when given the source.
     const auto built = runVtex({"build", vtl.string(), "-o", tmp("chords2.vto").string(), "--source", glb.string()});
     ASSERT_EQ(built.exitStatus, 0) << built.err;

@@ -72,9 +72,10 @@ struct SourceFidelity {
     std::vector<octree::BeamError> beams;
     std::vector<double> fitScale;
     std::vector<octree::ChordTransmittance> fitted;
-    /// Levels 0 … profiledLevels − 1 carry the texel's vertical profile (octree::VerticalProfile),
-    /// in every figure above.
+    /// Levels 0 … profiledLevels − 1 carry the texel's vertical profile (octree::DensityProfile),
+    /// in every figure above; levels 0 … profiledAcrossLevels − 1 its profile across as well.
     int profiledLevels = 0;
+    int profiledAcrossLevels = 0;
 };
 SourceFidelity measureSourceFidelity(const octree::Octree& tree, const ingest::TriangleMesh& source);
 

@@ -11,7 +11,7 @@
 #pragma once
 
 #include <vtex/octree/octree.h>
-#include <vtex/octree/vertical_profile.h>
+#include <vtex/octree/density_profile.h>
 #include <vtex/octree/voxel.h>
 #include <vtex/primitive/sggx.h>
 
@@ -109,17 +109,17 @@ public:
     int maxLevel() const { return mMaxLevel; }
     /// Level ℓ's grid (built now if need be), or null beyond maxGridLevel or the octree's depth.
     const LevelGrid* grid(int level) const;
-    /// The vertical profile of level ℓ's voxels (octree::VerticalProfile; measured now if need
+    /// The vertical profile of level ℓ's voxels (octree::DensityProfile; measured now if need
     /// be), or null where the level's voxels are uniform: every march multiplies a voxel's
     /// extinction over a segment by the profile's mean factor over the segment's heights.
-    const octree::VerticalProfile* profile(int level) const {
+    const octree::DensityProfile* profile(int level) const {
         return level >= 0 && level < mProfiledLevels ? measuredProfile(level) : nullptr;
     }
 
 private:
     struct Slot;
     struct ProfileSlot;
-    const octree::VerticalProfile* measuredProfile(int level) const;
+    const octree::DensityProfile* measuredProfile(int level) const;
     std::shared_ptr<const octree::Octree> mTree;
     int mProfiledLevels = 0;  ///< levels that may carry a profile (an upper bound, known before it is measured)
     std::unique_ptr<ProfileSlot> mProfile;

@@ -1,0 +1,133 @@
+// See density_profile.h.
+#include <vtex/octree/density_profile.h>
+
+#include <vtex/octree/chord_transmittance.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace vtex::octree {
+namespace {
+
+// The profile level's mean density per layer of each axis: [0] per x column (over y and z),
+// [1] per y column, [2] per z layer (over x and y), from one vertical walk through the middle of
+// each of its columns.
+std::array<std::vector<double>, 3> axisMeans(const Octree& tree, int level) {
+    const int n = 1 << level;
+    std::array<std::vector<double>, 3> means;
+    for (auto& m : means) m.assign(std::size_t(n), 0.0);
+    for (int x = 0; x < n; ++x)
+        for (int y = 0; y < n; ++y) {
+            const Vec3 a((x + 0.5) / n, (y + 0.5) / n, 0), b((x + 0.5) / n, (y + 0.5) / n, 1);
+            forEachVoxelOnSegment(tree, std::uint32_t(level), a, b, [&](const OctreeNode& node, double t0, double t1) {
+                const int k = std::clamp(int(0.5 * (t0 + t1) * n), 0, n - 1);
+                const double mass = double(node.data.density) * (t1 - t0) * n;  // in layer units
+                means[0][std::size_t(x)] += mass;
+                means[1][std::size_t(y)] += mass;
+                means[2][std::size_t(k)] += mass;
+            });
+        }
+    for (auto& m : means)
+        for (double& v : m) v /= double(n) * double(n);
+    return means;
+}
+
+// Each layer's mean over the mean of the `per` layers of the voxel it lies in (1 where they are
+// all empty).
+std::vector<double> normalised(const std::vector<double>& means, int per) {
+    std::vector<double> factor(means.size(), 1.0);
+    for (std::size_t first = 0; first < means.size(); first += std::size_t(per)) {
+        double mean = 0;
+        for (std::size_t k = first; k < first + std::size_t(per); ++k) mean += means[k] / per;
+        if (mean > 0)
+            for (std::size_t k = first; k < first + std::size_t(per); ++k) factor[k] = means[k] / mean;
+    }
+    return factor;
+}
+
+}  // namespace
+
+DensityProfile::DensityProfile(const Octree& tree) {
+    if (tree.levels.empty()) return;
+    const int level = std::min(kProfileLevel, int(tree.levelCount()) - 1);
+    const int profiled = profiledLevels(level);
+    if (profiled <= 0) return;
+    tree.loadLevels(std::uint32_t(level));
+    if (tree.levels[0].empty()) return;
+    const std::array<std::vector<double>, 3> means = axisMeans(tree, level);
+    mLayers = 1 << level;
+    for (int l = 0; l < profiled; ++l) {
+        const int per = 1 << (level - l);
+        std::vector<double> factor = normalised(means[2], per), cumulative(std::size_t(mLayers) + 1, 0.0);
+        for (int k = 0; k < mLayers; ++k) cumulative[std::size_t(k) + 1] = cumulative[std::size_t(k)] + factor[std::size_t(k)];
+        mFactor.push_back(std::move(factor));
+        mCumulative.push_back(std::move(cumulative));
+        if (l < profiledAcrossLevels(level)) mAcross.push_back({normalised(means[0], per), normalised(means[1], per)});
+    }
+}
+
+double DensityProfile::meanFactor(int level, double z0, double z1) const {
+    if (!profiles(level)) return 1;
+    const std::vector<double>& f = mFactor[std::size_t(level)];
+    const std::vector<double>& cum = mCumulative[std::size_t(level)];
+    // In layer widths; NaN heights count as the floor.
+    const double n = double(mLayers);
+    double a = std::clamp(z0 * n, 0.0, n), b = std::clamp(z1 * n, 0.0, n);
+    if (!(a == a)) a = 0;
+    if (!(b == b)) b = 0;
+    if (a > b) std::swap(a, b);
+    const int i = std::min(int(a), mLayers - 1), j = std::min(int(b), mLayers - 1);
+    if (i == j) return f[std::size_t(i)];
+    // Summed per layer, not as cum(b) − cum(a): a segment that barely crosses a layer boundary
+    // (a near-horizontal ray) keeps its precision.
+    const double inside = cum[std::size_t(j)] - cum[std::size_t(i) + 1];
+    return (f[std::size_t(i)] * (double(i + 1) - a) + inside + f[std::size_t(j)] * (b - double(j))) / (b - a);
+}
+
+double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const {
+    if (!profilesAcross(level)) return meanFactor(level, a.z(), b.z());
+    const Vec3 d = b - a;
+    if (!a.allFinite() || !d.allFinite()) return meanFactor(level, a.z(), b.z());
+    // The walk's end: the whole segment, or its first kMaxAcrossTiles tiles across.
+    const double end = std::min(1.0, kMaxAcrossTiles / std::max(std::abs(d.x()) + std::abs(d.y()), 1e-300));
+    const std::vector<double>& fz = mFactor[std::size_t(level)];
+    const std::array<std::vector<double>, 2>& across = mAcross[std::size_t(level)];
+    const double n = double(mLayers);
+    // An Amanatides–Woo walk through the profile level's cells along t ∈ [0, 1]: x and y wrap
+    // with the tile, z stays in its clamped layer past the floor and the top (as the renderer's
+    // march does), and each cell holds one product p_x·p_y·p.
+    std::array<std::int64_t, 3> cell;
+    std::array<double, 3> next, inc;
+    std::array<int, 3> step;
+    for (int k = 0; k < 3; ++k) {
+        const double u = k == 2 ? std::clamp(a[k] * n, 0.0, n - 1) : a[k] * n;
+        const std::int64_t c = std::int64_t(std::floor(u));
+        cell[std::size_t(k)] = c;
+        step[std::size_t(k)] = d[k] > 0 ? 1 : -1;
+        const bool last = k == 2 && ((c == 0 && d[k] < 0) || (c == mLayers - 1 && d[k] > 0));
+        const bool moves = d[k] != 0 && !last;
+        inc[std::size_t(k)] = moves ? 1 / (std::abs(d[k]) * n) : std::numeric_limits<double>::infinity();
+        const double boundary = d[k] > 0 ? double(c + 1) : double(c);
+        next[std::size_t(k)] = moves ? (boundary - a[k] * n) / (d[k] * n) : std::numeric_limits<double>::infinity();
+    }
+    const auto wrap = [m = std::int64_t(mLayers)](std::int64_t i) { return std::size_t(((i % m) + m) % m); };
+    double sum = 0, t = 0;
+    // At most (kMaxAcrossTiles + 2)·n crossings across and n in height; the bound only guards
+    // against rounding.
+    const std::size_t maxSteps = std::size_t((kMaxAcrossTiles + 4) * n) + 8;
+    for (std::size_t steps = 0; steps < maxSteps; ++steps) {
+        const std::size_t k = next[0] <= next[1] && next[0] <= next[2] ? 0 : next[1] <= next[2] ? 1 : 2;
+        const double t1 = std::clamp(next[k], t, end);
+        sum += across[0][wrap(cell[0])] * across[1][wrap(cell[1])] * fz[std::size_t(cell[2])] * (t1 - t);
+        t = t1;
+        if (t >= end) break;
+        cell[k] += step[k];
+        next[k] += inc[k];
+        if (k == 2 && (cell[2] == 0 || cell[2] == mLayers - 1)) next[2] = std::numeric_limits<double>::infinity();
+    }
+    // t = end > 0 but for a point (d = 0), where the loop took the product at it once.
+    return t > 0 ? sum / t : across[0][wrap(cell[0])] * across[1][wrap(cell[1])] * fz[std::size_t(cell[2])];
+}
+
+}  // namespace vtex::octree
