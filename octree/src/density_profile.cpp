@@ -57,13 +57,21 @@ DensityProfile::DensityProfile(const Octree& tree) {
     if (tree.levels[0].empty()) return;
     const std::array<std::vector<double>, 3> means = axisMeans(tree, level);
     mLayers = 1 << level;
+    mColumns = std::min(mLayers, kColumns);
     for (int l = 0; l < profiled; ++l) {
         const int per = 1 << (level - l);
         std::vector<double> factor = normalised(means[2], per), cumulative(std::size_t(mLayers) + 1, 0.0);
         for (int k = 0; k < mLayers; ++k) cumulative[std::size_t(k) + 1] = cumulative[std::size_t(k)] + factor[std::size_t(k)];
         mFactor.push_back(std::move(factor));
         mCumulative.push_back(std::move(cumulative));
-        if (l < profiledAcrossLevels(level)) mAcross.push_back({normalised(means[0], per), normalised(means[1], per)});
+        if (l < profiledAcrossLevels(level)) {
+            const int group = mLayers / mColumns;  // the profile level's columns in one of the profile's
+            std::array<std::vector<double>, 2> coarse{std::vector<double>(std::size_t(mColumns), 0.0),
+                                                      std::vector<double>(std::size_t(mColumns), 0.0)};
+            for (int ax = 0; ax < 2; ++ax)
+                for (int k = 0; k < mLayers; ++k) coarse[ax][std::size_t(k / group)] += means[ax][std::size_t(k)] / group;
+            mAcross.push_back({normalised(coarse[0], std::max(per / group, 1)), normalised(coarse[1], std::max(per / group, 1))});
+        }
     }
 }
 
@@ -89,45 +97,40 @@ double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const
     if (!profilesAcross(level)) return meanFactor(level, a.z(), b.z());
     const Vec3 d = b - a;
     if (!a.allFinite() || !d.allFinite()) return meanFactor(level, a.z(), b.z());
+    const std::array<std::vector<double>, 2>& across = mAcross[std::size_t(level)];
+    const double n = double(mColumns);
     // The walk's end: the whole segment, or its first kMaxAcrossTiles tiles across.
     const double end = std::min(1.0, kMaxAcrossTiles / std::max(std::abs(d.x()) + std::abs(d.y()), 1e-300));
-    const std::vector<double>& fz = mFactor[std::size_t(level)];
-    const std::array<std::vector<double>, 2>& across = mAcross[std::size_t(level)];
-    const double n = double(mLayers);
-    // An Amanatides–Woo walk through the profile level's cells along t ∈ [0, 1]: x and y wrap
-    // with the tile, z stays in its clamped layer past the floor and the top (as the renderer's
-    // march does), and each cell holds one product p_x·p_y·p.
-    std::array<std::int64_t, 3> cell;
-    std::array<double, 3> next, inc;
-    std::array<int, 3> step;
-    for (int k = 0; k < 3; ++k) {
-        const double u = k == 2 ? std::clamp(a[k] * n, 0.0, n - 1) : a[k] * n;
-        const std::int64_t c = std::int64_t(std::floor(u));
-        cell[std::size_t(k)] = c;
+    // An Amanatides–Woo walk through the columns along t ∈ [0, end], x and y wrapping with the
+    // tile: within a column p_x·p_y is constant and p's mean over the piece's heights comes from
+    // the cumulative sums.
+    std::array<std::int64_t, 2> cell;
+    std::array<double, 2> next, inc;
+    std::array<int, 2> step;
+    for (int k = 0; k < 2; ++k) {
+        cell[std::size_t(k)] = std::int64_t(std::floor(a[k] * n));
         step[std::size_t(k)] = d[k] > 0 ? 1 : -1;
-        const bool last = k == 2 && ((c == 0 && d[k] < 0) || (c == mLayers - 1 && d[k] > 0));
-        const bool moves = d[k] != 0 && !last;
-        inc[std::size_t(k)] = moves ? 1 / (std::abs(d[k]) * n) : std::numeric_limits<double>::infinity();
-        const double boundary = d[k] > 0 ? double(c + 1) : double(c);
-        next[std::size_t(k)] = moves ? (boundary - a[k] * n) / (d[k] * n) : std::numeric_limits<double>::infinity();
+        inc[std::size_t(k)] = d[k] != 0 ? 1 / (std::abs(d[k]) * n) : std::numeric_limits<double>::infinity();
+        const double boundary = d[k] > 0 ? double(cell[std::size_t(k)] + 1) : double(cell[std::size_t(k)]);
+        next[std::size_t(k)] = d[k] != 0 ? (boundary - a[k] * n) / (d[k] * n) : std::numeric_limits<double>::infinity();
     }
-    const auto wrap = [m = std::int64_t(mLayers)](std::int64_t i) { return std::size_t(((i % m) + m) % m); };
+    const auto wrap = [m = std::int64_t(mColumns)](std::int64_t i) { return std::size_t(((i % m) + m) % m); };
+    const auto product = [&](double t0, double t1) {
+        return across[0][wrap(cell[0])] * across[1][wrap(cell[1])] * meanFactor(level, a.z() + t0 * d.z(), a.z() + t1 * d.z());
+    };
     double sum = 0, t = 0;
-    // At most (kMaxAcrossTiles + 2)·n crossings across and n in height; the bound only guards
-    // against rounding.
+    // At most (kMaxAcrossTiles + 2)·n column crossings; the bound only guards against rounding.
     const std::size_t maxSteps = std::size_t((kMaxAcrossTiles + 4) * n) + 8;
-    for (std::size_t steps = 0; steps < maxSteps; ++steps) {
-        const std::size_t k = next[0] <= next[1] && next[0] <= next[2] ? 0 : next[1] <= next[2] ? 1 : 2;
+    for (std::size_t steps = 0; steps < maxSteps && t < end; ++steps) {
+        const std::size_t k = next[0] <= next[1] ? 0 : 1;
         const double t1 = std::clamp(next[k], t, end);
-        sum += across[0][wrap(cell[0])] * across[1][wrap(cell[1])] * fz[std::size_t(cell[2])] * (t1 - t);
+        sum += product(t, t1) * (t1 - t);
         t = t1;
-        if (t >= end) break;
         cell[k] += step[k];
         next[k] += inc[k];
-        if (k == 2 && (cell[2] == 0 || cell[2] == mLayers - 1)) next[2] = std::numeric_limits<double>::infinity();
     }
     // t = end > 0 but for a point (d = 0), where the loop took the product at it once.
-    return t > 0 ? sum / t : across[0][wrap(cell[0])] * across[1][wrap(cell[1])] * fz[std::size_t(cell[2])];
+    return t > 0 ? sum / t : product(0, 0);
 }
 
 }  // namespace vtex::octree

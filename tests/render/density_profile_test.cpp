@@ -48,10 +48,10 @@ std::shared_ptr<const vtex::octree::Octree> box() {
 }
 
 // 64³ voxels of density f(x)·g(y)·h(z), small whole numbers whose products and the levels'
-// means of them floats hold exactly.
+// means of them floats hold exactly; f and g constant over each of the profile's 16 columns.
 std::shared_ptr<const vtex::octree::Octree> separable() {
     return makeOctree(6, [](int x, int y, int z) {
-        return std::optional(sphereVoxel(float((1 + (x * 5) % 3) * (1 + (y * 3) % 2) * (1 + (z * 7) % 4))));
+        return std::optional(sphereVoxel(float((1 + (x / 4 * 5) % 3) * (1 + (y / 4 * 3) % 2) * (1 + (z * 7) % 4))));
     });
 }
 
@@ -157,8 +157,9 @@ TEST(DensityProfile, SpreadsTheCoarsestVoxelsAcrossAsTheColumnsDo) {
     // field) is walked over its first 64 tiles: along an axis, exactly.
     EXPECT_NEAR(p.meanFactor(0, V(0.3, 0, 0.3), V(0.3, 1000, 0.4)), 16, 1e-12);
     EXPECT_NEAR(p.meanFactor(0, V(0.1, 0, 0.3), V(0.1, 1000, 0.4)), 0, 1e-12);
-    // Heights outside the texel count as its floor or top; a point takes the product at it.
-    EXPECT_NEAR(p.meanFactor(0, V(0.3, 0.5, -1), V(0.3, 0.5, 0.3)), 16 * 0.05 / 1.3, 1e-12);
+    // Heights outside the texel are clamped to it, as in the heights' form (p's mean over
+    // [0, 0.3] is 4 · 0.05 / 0.3); a point takes the product at it.
+    EXPECT_NEAR(p.meanFactor(0, V(0.3, 0.5, -1), V(0.3, 0.5, 0.3)), 16 * 0.05 / 0.3, 1e-12);
     EXPECT_NEAR(p.meanFactor(0, V(0.3, 0.5, 0.3), V(0.3, 0.5, 0.3)), 16, 1e-12);
     EXPECT_NEAR(p.meanFactor(1, V(0.3, 0.2, 0.3), V(0.4, 0.2, 0.4)), 4, 1e-12);
     EXPECT_NEAR(p.meanFactor(1, V(0.1, 0.2, 0.3), V(0.2, 0.2, 0.4)), 0, 1e-12);
@@ -176,8 +177,8 @@ TEST(DensityProfile, SpreadsTheCoarsestVoxelsAcrossAsTheColumnsDo) {
     EXPECT_EQ(DensityProfile::profiledAcrossLevels(8), 2);
 }
 
-// A separable texel, ρ = f(x)·g(y)·h(z): the column means of each axis are f, g and h up to a
-// constant, so levels 0–1's separable profile gives every voxel of theirs back level 6's
+// A separable texel, ρ = f(x)·g(y)·h(z), f and g constant over each of the profile's columns:
+// the column means of each axis are f, g and h up to a constant, so levels 0–1's separable profile gives every voxel of theirs back level 6's
 // density, and the march of levels 0–1 must give level 6's optical depth on any segment, across
 // tiles too; level 2, profiled in height only, must not.
 TEST(DensityProfile, ProfiledCoarsestLevelsOfASeparableTexelAreItsFinestLevel) {
