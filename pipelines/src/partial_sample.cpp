@@ -61,48 +61,4 @@ SampleResult sampleOrUpdate(const ingest::TriangleMesh& mesh, const sampler::Sam
     return {sampler::sampleMesh(mesh, options, progress), std::nullopt, {}};
 }
 
-namespace {
-
-// The earlier build's tree when its manifest vouches for it, names `parameters` and says it
-// built the volume with hash `volumeHash`.
-std::optional<octree::Octree> readEarlierTree(const EarlierBuild& earlier, const std::string& volumeHash) {
-    std::ifstream in(earlier.manifest);
-    if (!in) return std::nullopt;
-    try {
-        const nlohmann::json j = nlohmann::json::parse(in);
-        const auto& details = j.at("details");
-        if (details.at("parameters").get<std::string>() != earlier.parameters ||
-            details.at("volume").get<std::string>() != volumeHash ||
-            hashFile(earlier.octree) != j.at("outputs").at("octree").at("hash").get<std::string>())
-            return std::nullopt;
-        return octree::readVto(earlier.octree);
-    } catch (const std::exception&) {
-        return std::nullopt;  // no earlier build to start from: build in full
-    }
-}
-
-}  // namespace
-
-octree::Octree buildOrUpdate(octree::SparseVolume volume, const octree::BuildOptions& options,
-                             const std::optional<octree::VoxelBox>& region, const std::string& updatedFrom,
-                             const EarlierBuild& earlier, Progress& progress, bool& updated) {
-    updated = false;
-    if (region && !updatedFrom.empty())
-        if (const auto old = readEarlierTree(earlier, updatedFrom)) {
-            auto builder = octree::OctreeBuilder::resume(*old, volume.info, options);
-            const bool solid = std::any_of(volume.blocks.begin(), volume.blocks.end(), [](const auto& b) { return b.isSolid(); });
-            if (builder && !solid && old->info.rule == options.rule && old->info.tolerance == float(options.tolerance)) {
-                std::vector<octree::VolumeBlock> inside;
-                for (const auto& b : volume.blocks) {
-                    const auto c = octree::mortonDecode(b.key);
-                    if (region->contains(c[0], c[1], c[2])) inside.push_back(b);
-                }
-                builder->updateRegion(*region, std::move(inside), progress);
-                updated = true;
-                return builder->compress(progress);
-            }
-        }
-    return octree::buildOctree(std::move(volume), options, progress);
-}
-
 }  // namespace vtex::pipelines::detail

@@ -1,9 +1,9 @@
 // The sample stage of `vtex run` re-sampling only where its source changed (issue 13, "partial
 // recompute"): the stage keeps, beside its volume, a copy of the mesh it sampled; when the
 // source changes, the triangles that differ between that copy and the new mesh give the region
-// (sampler::changedRegion) that sampler::updateRegion samples again; the build stage after it
-// then resumes its earlier octree and filters again only that region's ancestors. Internal to
-// vtex_pipelines.
+// (sampler::changedRegion) that sampler::updateRegion samples again. The build stage after it
+// builds in full: resuming the earlier octree (`vtex build --update`) costs more than a full
+// build (docs/formats.md, "Re-sampling a region"). Internal to vtex_pipelines.
 #pragma once
 
 #include <vtex/ingest/mesh.h>
@@ -41,21 +41,5 @@ struct SampleResult {
 SampleResult sampleOrUpdate(const ingest::TriangleMesh& mesh, const sampler::SampleOptions& options,
                             const EarlierSample& earlier, Progress& progress);
 
-/// The build stage's earlier run. Its manifest's details hold `parameters` (the filter and
-/// tolerance) and `volume`, the content hash of the volume it built.
-struct EarlierBuild {
-    std::filesystem::path manifest;  ///< builds/NAME.manifest.json
-    std::filesystem::path octree;    ///< the .vto it wrote
-    std::string parameters;
-};
-
-/// The octree of `volume`: the earlier build's tree resumed (octree::OctreeBuilder::resume) and
-/// only `region` filtered again when the sample stage re-sampled that region of the very volume
-/// the earlier build built (`updatedFrom`), the earlier build's manifest vouches for its octree
-/// and names the same parameters, and the tree allows it; a full build otherwise. The same tree
-/// either way; `updated` says which.
-octree::Octree buildOrUpdate(octree::SparseVolume volume, const octree::BuildOptions& options,
-                             const std::optional<octree::VoxelBox>& region, const std::string& updatedFrom,
-                             const EarlierBuild& earlier, Progress& progress, bool& updated);
 
 }  // namespace vtex::pipelines::detail

@@ -138,8 +138,7 @@ void GraphBuilder::addTexels() {
         Stage b{"build", step.name};
         b.inputs = {sampleIndex.at(step.name)};
         b.outputs["octree"] = root / "builds" / (step.name + ".vto");
-        EarlierBuild earlier{manifestPath(b, root), b.outputs.at("octree"), buildParameters(step)};
-        b.work = std::make_shared<BuildWork>(step, std::move(earlier), header, budget);
+        b.work = std::make_shared<BuildWork>(step, buildParameters(step), header, budget);
         buildIndex[step.name] = add(std::move(b));
     }
 }

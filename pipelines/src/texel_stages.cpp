@@ -127,7 +127,7 @@ Json SampleWork::run(const std::vector<Stage>& stages, const Stage& self) const 
 std::string BuildWork::describe(const std::vector<Stage>& stages, const Stage& self) const {
     const Stage& sample = stages[self.inputs[0]];
     // The source too: the stage measures each level against it (its details).
-    return mHeader + "build\n" + mEarlier.parameters + "\nvolume " + sample.outputHashes.at("volume") + "\nsource " +
+    return mHeader + "build\n" + mParameters + "\nvolume " + sample.outputHashes.at("volume") + "\nsource " +
            stages[sample.inputs[0]].outputHashes.at("mesh") + "\n";
 }
 
@@ -140,21 +140,9 @@ Json BuildWork::run(const std::vector<Stage>& stages, const Stage& self) const {
     octree::BuildOptions o;
     o.rule = mFilter;
     o.tolerance = mTolerance;
-    // After a partial re-sampling, only the region's ancestors are filtered again (cached or
-    // run: buildOrUpdate checks that the earlier build built the volume the region was
-    // re-sampled from).
-    std::optional<octree::VoxelBox> region;
-    std::string updatedFrom;
-    if (!sample.record.detailsJson.empty()) {
-        const Json d = Json::parse(sample.record.detailsJson);
-        if (d.value("updated_region", Json()).is_array()) {
-            const auto r = d["updated_region"].get<std::vector<std::uint32_t>>();
-            region = octree::VoxelBox{{r.at(0), r.at(1), r.at(2)}, {r.at(3), r.at(4), r.at(5)}};
-            updatedFrom = d.value("updated_from", std::string());
-        }
-    }
-    bool updated = false;
-    const octree::Octree tree = buildOrUpdate(std::move(volume), o, region, updatedFrom, mEarlier, *self.progress, updated);
+    // In full after a partial re-sampling too: resuming the earlier octree costs more than a
+    // full build (docs/formats.md, "Re-sampling a region").
+    const octree::Octree tree = octree::buildOctree(std::move(volume), o, *self.progress);
     octree::writeVto(tree, self.outputs.at("octree"));
     // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
     const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, ingest::loadMesh(sourceFile));
@@ -169,8 +157,7 @@ Json BuildWork::run(const std::vector<Stage>& stages, const Stage& self) const {
                           {"beam_error_mean_abs", fidelity.beams[l].meanAbs},
                           {"beam_error_p95_abs", fidelity.beams[l].p95Abs}});
     return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels},
-                {"parameters", mEarlier.parameters}, {"volume", sample.outputHashes.at("volume")},
-                {"updated", updated}};
+                {"parameters", mParameters}, {"volume", sample.outputHashes.at("volume")}};
 }
 
 }  // namespace vtex::pipelines::detail

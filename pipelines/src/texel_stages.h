@@ -49,15 +49,15 @@ private:
     MemoryBudget& mBudget;
 };
 
-/// The build stage's filter parameters, as its key and EarlierBuild::parameters hold them.
+/// The build stage's filter parameters, as its key and its details hold them.
 std::string buildParameters(const TexelStep& step);
 
 /// build/NAME: the sampled volume (input 0) filtered into builds/NAME.vto ("octree"), each level
 /// measured against the source mesh (the sample's input).
 class BuildWork final : public StageWork {
 public:
-    BuildWork(const TexelStep& step, EarlierBuild earlier, std::string header, MemoryBudget& budget)
-        : mFilter(step.filter), mTolerance(step.tolerance), mEarlier(std::move(earlier)), mHeader(std::move(header)),
+    BuildWork(const TexelStep& step, std::string parameters, std::string header, MemoryBudget& budget)
+        : mFilter(step.filter), mTolerance(step.tolerance), mParameters(std::move(parameters)), mHeader(std::move(header)),
           mBudget(budget) {}
     std::string describe(const std::vector<Stage>& stages, const Stage& self) const override;
     nlohmann::json run(const std::vector<Stage>& stages, const Stage& self) const override;
@@ -65,7 +65,7 @@ public:
 private:
     octree::FilterRule mFilter;
     double mTolerance;
-    EarlierBuild mEarlier;
+    std::string mParameters;
     std::string mHeader;
     MemoryBudget& mBudget;
 };
