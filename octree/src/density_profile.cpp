@@ -108,11 +108,13 @@ double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const
     std::array<double, 2> next, inc;
     std::array<int, 2> step;
     for (int k = 0; k < 2; ++k) {
-        cell[std::size_t(k)] = std::int64_t(std::floor(a[k] * n));
+        // The start's place in its tile (periodic), in columns: no overflow however far a is.
+        const double u = (a[k] - std::floor(a[k])) * n;
+        cell[std::size_t(k)] = std::min(std::int64_t(u), std::int64_t(mColumns) - 1);
         step[std::size_t(k)] = d[k] > 0 ? 1 : -1;
         inc[std::size_t(k)] = d[k] != 0 ? 1 / (std::abs(d[k]) * n) : std::numeric_limits<double>::infinity();
         const double boundary = d[k] > 0 ? double(cell[std::size_t(k)] + 1) : double(cell[std::size_t(k)]);
-        next[std::size_t(k)] = d[k] != 0 ? (boundary - a[k] * n) / (d[k] * n) : std::numeric_limits<double>::infinity();
+        next[std::size_t(k)] = d[k] != 0 ? (boundary - u) / (d[k] * n) : std::numeric_limits<double>::infinity();
     }
     const auto wrap = [m = std::int64_t(mColumns)](std::int64_t i) { return std::size_t(((i % m) + m) % m); };
     const auto product = [&](double t0, double t1) {
@@ -129,7 +131,7 @@ double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const
         cell[k] += step[k];
         next[k] += inc[k];
     }
-    // t = end > 0 but for a point (d = 0), where the loop took the product at it once.
+    // end > 0, so t > 0 (a point, d = 0, took the product at it once).
     return t > 0 ? sum / t : product(0, 0);
 }
 

@@ -153,6 +153,7 @@ TEST(DensityProfile, SpreadsTheCoarsestVoxelsAcrossAsTheColumnsDo) {
     EXPECT_NEAR(p.meanFactor(0, V(1.2, 7.5, 0.3), V(1.3, -3.5, 0.3)), 8, 1e-12);
     EXPECT_NEAR(p.meanFactor(0, V(-0.8, 0.5, 0.3), V(-0.7, 0.5, 0.3)), 8, 1e-12);
     EXPECT_NEAR(p.meanFactor(0, V(0, 0.5, 0.3), V(3, 0.5, 0.3)), 4, 1e-12);  // three whole tiles: p_x's mean
+    EXPECT_NEAR(p.meanFactor(0, V(1e15 + 0.3, -1e15, 0.3), V(1e15 + 0.3, -1e15 + 0.5, 0.4)), 16, 1e-12);  // far tiles
     // A segment 1000 tiles long along y in the box's columns (one run of a level-0 voxel over a
     // field) is walked over its first 64 tiles: along an axis, exactly.
     EXPECT_NEAR(p.meanFactor(0, V(0.3, 0, 0.3), V(0.3, 1000, 0.4)), 16, 1e-12);
