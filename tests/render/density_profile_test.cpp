@@ -55,6 +55,49 @@ std::shared_ptr<const vtex::octree::Octree> separable() {
     });
 }
 
+// Levels 0 … `last` of `tree` and its level 6 are the same medium: along 200 random segments
+// (x and y drawn in [across, 1 − across], so crossing tiles when across < 0; z in [0, 1]) the
+// renderer's march at each of them gives level 6's optical depth within 1e-9, and so does the
+// octree's chord measure; level last + 1 does not.
+void expectCoarseLevelsAreTheFinest(const std::shared_ptr<const vtex::octree::Octree>& tree, double tau, int last,
+                                    double across, unsigned seed) {
+    const vtex::render::MarchVolume volume(tree);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> unit(0, 1), wide(across, 1 - across);
+    const auto depth = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, int level) {
+        return -std::log(vtex::render::marchTransmittance(volume, tau, a, b, level).transmittance);
+    };
+    double nextDiffers = 0;
+    for (int i = 0; i < 200; ++i) {
+        const Eigen::Vector3d a(wide(rng), wide(rng), unit(rng)), b(wide(rng), wide(rng), unit(rng));
+        const double fine = depth(a, b, 6);
+        for (int level = 0; level <= last; ++level)
+            EXPECT_NEAR(depth(a, b, level), fine, 1e-9 * (1 + fine)) << "level " << level << ", segment " << i;
+        nextDiffers = std::max(nextDiffers, std::abs(depth(a, b, last + 1) - fine));
+    }
+    EXPECT_GT(nextDiffers, 1e-3);
+    const auto nothing = [](const Eigen::Vector3d&, const Eigen::Vector3d&) { return true; };
+    const auto chords = vtex::octree::measureChordTransmittance(*tree, nothing, tau, 512);
+    ASSERT_EQ(chords.size(), 7u);
+    for (int level = 0; level <= last; ++level)
+        EXPECT_NEAR(chords[std::size_t(level)].transmittance, chords[6].transmittance, 1e-9) << "level " << level;
+    EXPECT_GT(std::abs(chords[std::size_t(last) + 1].transmittance - chords[6].transmittance), 1e-6);
+}
+
+// The alpha of the centre pixel of a 16×16 view from `eye` along +y into a 20×20 field of
+// `texel` (shell height 1, τ `tau`), every ray at level 0 (a large LOD bias).
+float centreAlphaAtLevel0(const std::shared_ptr<const vtex::octree::Octree>& texel, double tau, const Eigen::Vector3d& eye) {
+    using namespace vtex::render::test;
+    vtex::render::Scene scene = baseScene(eye, eye + Eigen::Vector3d(0, 20, 0), 4, 16);
+    addSurface(scene, gridMesh(0, 0, 20, 20, 0, 20), addTexel(scene, texel, tau), 1.0);
+    vtex::render::RenderOptions options;
+    options.lodBias = 10;
+    const vtex::render::RenderResult r = renderQuiet(scene, options);
+    EXPECT_GT(r.stats.levelHistogram.at(0), 0.0);
+    for (std::size_t l = 1; l < r.stats.levelHistogram.size(); ++l) EXPECT_EQ(r.stats.levelHistogram[l], 0.0);
+    return r.image.rgba[(8 * 16 + 8) * 4 + 3];
+}
+
 }  // namespace
 
 // By hand: level 0's voxel spans the 64 layers of level 6 and holds density 2 in a quarter of
@@ -106,27 +149,7 @@ TEST(DensityProfile, KeepsEachVoxelsMassAndPutsItWhereTheLayersHaveIt) {
 // transmittance at levels 0–3 as at level 6; level 4, whose voxels stay uniform over 4 layers,
 // must not.
 TEST(DensityProfile, ProfiledCoarseLevelsOfALayeredTexelAreItsFinestLevel) {
-    const auto tree = layered();
-    const vtex::render::MarchVolume volume(tree);
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<double> unit(0, 1);
-    double level4Differs = 0;
-    for (int i = 0; i < 200; ++i) {
-        const Eigen::Vector3d a(unit(rng), unit(rng), unit(rng)), b(unit(rng), unit(rng), unit(rng));
-        const double fine = -std::log(vtex::render::marchTransmittance(volume, 0.05, a, b, 6).transmittance);
-        for (int level = 0; level <= 3; ++level) {
-            const double coarse = -std::log(vtex::render::marchTransmittance(volume, 0.05, a, b, level).transmittance);
-            EXPECT_NEAR(coarse, fine, 1e-9 * (1 + fine)) << "level " << level << ", segment " << i;
-        }
-        level4Differs = std::max(level4Differs, std::abs(-std::log(vtex::render::marchTransmittance(volume, 0.05, a, b, 4).transmittance) - fine));
-    }
-    EXPECT_GT(level4Differs, 0.01);
-    const auto nothing = [](const Eigen::Vector3d&, const Eigen::Vector3d&) { return true; };
-    const auto chords = vtex::octree::measureChordTransmittance(*tree, nothing, 0.05, 512);
-    ASSERT_EQ(chords.size(), 7u);
-    for (int level = 0; level <= 3; ++level)
-        EXPECT_NEAR(chords[std::size_t(level)].transmittance, chords[6].transmittance, 1e-9) << "level " << level;
-    EXPECT_GT(std::abs(chords[4].transmittance - chords[6].transmittance), 1e-6);
+    expectCoarseLevelsAreTheFinest(layered(), 0.05, 3, 0, 7);
 }
 
 // By hand, on the box: level 0's voxel holds the box's mass spread over the texel (mean 2/16);
@@ -179,31 +202,12 @@ TEST(DensityProfile, SpreadsTheCoarsestVoxelsAcrossAsTheColumnsDo) {
 }
 
 // A separable texel, ρ = f(x)·g(y)·h(z), f and g constant over each of the profile's columns:
-// the column means of each axis are f, g and h up to a constant, so levels 0–1's separable profile gives every voxel of theirs back level 6's
-// density, and the march of levels 0–1 must give level 6's optical depth on any segment, across
-// tiles too; level 2, profiled in height only, must not.
+// the column means of each axis are f, g and h up to a constant, so levels 0–1's separable
+// profile gives every voxel of theirs back level 6's density, and the march of levels 0–1 must
+// give level 6's optical depth on any segment, across tiles too; level 2, profiled in height
+// only, must not.
 TEST(DensityProfile, ProfiledCoarsestLevelsOfASeparableTexelAreItsFinestLevel) {
-    const auto tree = separable();
-    const vtex::render::MarchVolume volume(tree);
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<double> unit(0, 1), across(-2, 3);
-    double level2Differs = 0;
-    for (int i = 0; i < 200; ++i) {
-        const Eigen::Vector3d a(across(rng), across(rng), unit(rng)), b(across(rng), across(rng), unit(rng));
-        const double fine = -std::log(vtex::render::marchTransmittance(volume, 0.002, a, b, 6).transmittance);
-        for (int level = 0; level <= 1; ++level) {
-            const double coarse = -std::log(vtex::render::marchTransmittance(volume, 0.002, a, b, level).transmittance);
-            EXPECT_NEAR(coarse, fine, 1e-9 * (1 + fine)) << "level " << level << ", segment " << i;
-        }
-        level2Differs = std::max(level2Differs, std::abs(-std::log(vtex::render::marchTransmittance(volume, 0.002, a, b, 2).transmittance) - fine));
-    }
-    EXPECT_GT(level2Differs, 1e-3);
-    const auto nothing = [](const Eigen::Vector3d&, const Eigen::Vector3d&) { return true; };
-    const auto chords = vtex::octree::measureChordTransmittance(*tree, nothing, 0.02, 512);
-    ASSERT_EQ(chords.size(), 7u);
-    for (int level = 0; level <= 1; ++level)
-        EXPECT_NEAR(chords[std::size_t(level)].transmittance, chords[6].transmittance, 1e-9) << "level " << level;
-    EXPECT_GT(std::abs(chords[2].transmittance - chords[6].transmittance), 1e-6);
+    expectCoarseLevelsAreTheFinest(separable(), 0.002, 1, -2, 11);
 }
 
 // The camera march carries the profile: a slab texel seen edge-on from a camera in the shell, at
@@ -211,21 +215,9 @@ TEST(DensityProfile, ProfiledCoarsestLevelsOfASeparableTexelAreItsFinestLevel) {
 // make twenty texels of it opaque, and the profile leaves it empty; a ray through the slab is
 // stopped.
 TEST(DensityProfile, TheCameraMarchSeesTheCoarseVoxelsMatterWhereItIs) {
-    using namespace vtex::render::test;
     const auto texel = slab(6);
-    const auto view = [&](double height) {
-        vtex::render::Scene scene = baseScene(Eigen::Vector3d(10.5, -1, height), Eigen::Vector3d(10.5, 19, height), 4, 16);
-        addSurface(scene, gridMesh(0, 0, 20, 20, 0, 20), addTexel(scene, texel), 1.0);
-        vtex::render::RenderOptions options;
-        options.lodBias = 10;
-        const vtex::render::RenderResult r = renderQuiet(scene, options);
-        EXPECT_GT(r.stats.levelHistogram.at(0), 0.0);
-        for (std::size_t l = 1; l < r.stats.levelHistogram.size(); ++l) EXPECT_EQ(r.stats.levelHistogram[l], 0.0);
-        const std::size_t centre = (8 * 16 + 8) * 4 + 3;
-        return r.image.rgba[centre];  // the centre pixel's alpha
-    };
-    EXPECT_LT(view(0.75), 1e-6);
-    EXPECT_GT(view(0.375), 0.99);
+    EXPECT_LT(centreAlphaAtLevel0(texel, 1, Eigen::Vector3d(10.5, -1, 0.75)), 1e-6);
+    EXPECT_GT(centreAlphaAtLevel0(texel, 1, Eigen::Vector3d(10.5, -1, 0.375)), 0.99);
 }
 
 // The camera march carries the profile across: the box texel seen along y from a camera in the
@@ -233,21 +225,9 @@ TEST(DensityProfile, TheCameraMarchSeesTheCoarseVoxelsMatterWhereItIs) {
 // columns and layers is stopped; one beside the box, at the box's height, which a uniform
 // level-0 voxel (twenty texels of mean density 1/8) would all but stop, sees nothing.
 TEST(DensityProfile, TheCameraMarchSeesTheCoarsestVoxelsMatterAcross) {
-    using namespace vtex::render::test;
     const auto texel = box();
-    const auto view = [&](double x) {
-        vtex::render::Scene scene = baseScene(Eigen::Vector3d(x, -1, 0.375), Eigen::Vector3d(x, 19, 0.375), 4, 16);
-        addSurface(scene, gridMesh(0, 0, 20, 20, 0, 20), addTexel(scene, texel, 8), 1.0);
-        vtex::render::RenderOptions options;
-        options.lodBias = 10;
-        const vtex::render::RenderResult r = renderQuiet(scene, options);
-        EXPECT_GT(r.stats.levelHistogram.at(0), 0.0);
-        for (std::size_t l = 1; l < r.stats.levelHistogram.size(); ++l) EXPECT_EQ(r.stats.levelHistogram[l], 0.0);
-        const std::size_t centre = (8 * 16 + 8) * 4 + 3;
-        return r.image.rgba[centre];  // the centre pixel's alpha
-    };
-    EXPECT_GT(view(10.375), 0.99);
-    EXPECT_LT(view(10.75), 1e-6);
+    EXPECT_GT(centreAlphaAtLevel0(texel, 8, Eigen::Vector3d(10.375, -1, 0.375)), 0.99);
+    EXPECT_LT(centreAlphaAtLevel0(texel, 8, Eigen::Vector3d(10.75, -1, 0.375)), 1e-6);
 }
 
 // The bush (2000 leaves at 256³, the bush field's texel), as `vtex inspect --source` measures it:
