@@ -46,9 +46,9 @@ public:
     /// A level is profiled across as well where one voxel spans at least this many of the
     /// profile's columns (levels 0–1 of a texel of 64³ voxels or more), half the tile or more.
     /// Measured on the 256³ bush (`vtex inspect bush.vto --source bush.glb`, fitted): the
-    /// isotropic chord error at levels 0–1 goes from −0.022 / −0.021 to −0.010 / −0.009; at
-    /// level 2, which meets the goal without it (−0.012), it would give −0.007 at the price of a
-    /// walk through the profile level's columns in every voxel the far view marches.
+    /// isotropic chord error at levels 0–1 goes from −0.022 / −0.021 to −0.010 / −0.009; level 2
+    /// meets the goal without it (−0.012; −0.007 with it), and the rule stops where the goal
+    /// needed it.
     static constexpr int kMinColumns = 32;
     /// The profile across keeps this many columns a side (each the mean of 4 of level 6's), so
     /// that a walk through a voxel crosses few: on the bush field's far view forced to levels
