@@ -9,7 +9,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
 #include <fstream>
 
 namespace vtex::pipelines::detail {
@@ -19,7 +18,6 @@ namespace {
 struct Earlier {
     ingest::TriangleMesh mesh;
     octree::SparseVolume volume;
-    std::string volumeHash;
 };
 
 std::optional<Earlier> readEarlier(const EarlierSample& earlier) {
@@ -29,11 +27,10 @@ std::optional<Earlier> readEarlier(const EarlierSample& earlier) {
         const nlohmann::json j = nlohmann::json::parse(in);
         if (j.at("details").at("parameters").get<std::string>() != earlier.parameters) return std::nullopt;
         const auto& outputs = j.at("outputs");
-        const std::string volumeHash = outputs.at("volume").at("hash").get<std::string>();
-        if (hashFile(earlier.volume) != volumeHash ||
+        if (hashFile(earlier.volume) != outputs.at("volume").at("hash").get<std::string>() ||
             hashFile(earlier.sampledMesh) != outputs.at("sampled_mesh").at("hash").get<std::string>())
             return std::nullopt;
-        return Earlier{ingest::loadMesh(earlier.sampledMesh), octree::readVtl(earlier.volume), volumeHash};
+        return Earlier{ingest::loadMesh(earlier.sampledMesh), octree::readVtl(earlier.volume)};
     } catch (const std::exception&) {
         return std::nullopt;  // no earlier run to start from: sample in full
     }
@@ -51,14 +48,13 @@ SampleResult sampleOrUpdate(const ingest::TriangleMesh& mesh, const sampler::Sam
             sampler::SampleOptions partial = options;
             partial.region = region;
             try {
-                return {sampler::updateRegion(mesh, before->volume, partial, earlier.volume, progress), region,
-                        before->volumeHash};
+                return {sampler::updateRegion(mesh, before->volume, partial, earlier.volume, progress), region};
             } catch (const InputError&) {
                 // Sampled otherwise (a solid interior, say): the full sampling below.
             }
         }
     }
-    return {sampler::sampleMesh(mesh, options, progress), std::nullopt, {}};
+    return {sampler::sampleMesh(mesh, options, progress), std::nullopt};
 }
 
 }  // namespace vtex::pipelines::detail

@@ -29,8 +29,6 @@ struct SampleResult {
     octree::SparseVolume volume;
     /// The region re-sampled; empty: sampled in full.
     std::optional<octree::VoxelBox> region;
-    /// With a region: the content hash of the earlier volume it started from.
-    std::string updatedFrom;
 };
 
 /// `mesh` sampled with `options`: by updateRegion when the earlier run's manifest names
@@ -40,6 +38,5 @@ struct SampleResult {
 /// interior). The result is the full sampling's either way.
 SampleResult sampleOrUpdate(const ingest::TriangleMesh& mesh, const sampler::SampleOptions& options,
                             const EarlierSample& earlier, Progress& progress);
-
 
 }  // namespace vtex::pipelines::detail

@@ -103,7 +103,7 @@ Json SampleWork::run(const std::vector<Stage>& stages, const Stage& self) const 
     Progress& quiet = *self.progress;
     // An edited source is re-sampled only where its triangles changed (not with --force).
     const SampleResult sampled =
-        mForce ? SampleResult{sampler::sampleMesh(mesh, o, quiet), std::nullopt, {}} : sampleOrUpdate(mesh, o, mEarlier, quiet);
+        mForce ? SampleResult{sampler::sampleMesh(mesh, o, quiet), std::nullopt} : sampleOrUpdate(mesh, o, mEarlier, quiet);
     const octree::SparseVolume& volume = sampled.volume;
     // Both or neither: a copy of another mesh beside the volume would mislead the next run.
     AtomicOutputFile vtl(self.outputs.at("volume")), copy(self.outputs.at("sampled_mesh"));
@@ -120,8 +120,7 @@ Json SampleWork::run(const std::vector<Stage>& stages, const Stage& self) const 
                 {"source_area", volume.info.sourceArea},
                 {"fit_error_mean", volume.info.fitError.mean},
                 {"parameters", mEarlier.parameters},
-                {"updated_region", region},
-                {"updated_from", sampled.updatedFrom}};
+                {"updated_region", region}};
 }
 
 std::string BuildWork::describe(const std::vector<Stage>& stages, const Stage& self) const {
@@ -157,7 +156,7 @@ Json BuildWork::run(const std::vector<Stage>& stages, const Stage& self) const {
                           {"beam_error_mean_abs", fidelity.beams[l].meanAbs},
                           {"beam_error_p95_abs", fidelity.beams[l].p95Abs}});
     return Json{{"stored_nodes", tree.storedNodes()}, {"compression", tree.compression()}, {"levels", levels},
-                {"parameters", mParameters}, {"volume", sample.outputHashes.at("volume")}};
+                {"parameters", mParameters}};
 }
 
 }  // namespace vtex::pipelines::detail
