@@ -57,7 +57,6 @@ DensityProfile::DensityProfile(const Octree& tree) {
     if (tree.levels[0].empty()) return;
     const std::array<std::vector<double>, 3> means = axisMeans(tree, level);
     mLayers = 1 << level;
-    mColumns = std::min(mLayers, kColumns);
     for (int l = 0; l < profiled; ++l) {
         const int per = 1 << (level - l);
         std::vector<double> factor = normalised(means[2], per), cumulative(std::size_t(mLayers) + 1, 0.0);
@@ -65,12 +64,16 @@ DensityProfile::DensityProfile(const Octree& tree) {
         mFactor.push_back(std::move(factor));
         mCumulative.push_back(std::move(cumulative));
         if (l < profiledAcrossLevels(level)) {
-            const int group = mLayers / mColumns;  // the profile level's columns in one of the profile's
-            std::array<std::vector<double>, 2> coarse{std::vector<double>(std::size_t(mColumns), 0.0),
-                                                      std::vector<double>(std::size_t(mColumns), 0.0)};
-            for (int ax = 0; ax < 2; ++ax)
+            // mLayers ≥ kMinColumns ≥ kColumns here: each of the profile's columns is the mean of
+            // `group` of the profile level's, and a voxel spans per / group ≥ 1 of them.
+            const int group = mLayers / kColumns;
+            std::array<std::vector<double>, 2> coarse;
+            for (int ax = 0; ax < 2; ++ax) {
+                coarse[ax].assign(std::size_t(kColumns), 0.0);
                 for (int k = 0; k < mLayers; ++k) coarse[ax][std::size_t(k / group)] += means[ax][std::size_t(k)] / group;
-            mAcross.push_back({normalised(coarse[0], std::max(per / group, 1)), normalised(coarse[1], std::max(per / group, 1))});
+                coarse[ax] = normalised(coarse[ax], per / group);
+            }
+            mAcross.push_back(std::move(coarse));
         }
     }
 }
@@ -98,7 +101,7 @@ double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const
     const Vec3 d = b - a;
     if (!a.allFinite() || !d.allFinite()) return meanFactor(level, a.z(), b.z());
     const std::array<std::vector<double>, 2>& across = mAcross[std::size_t(level)];
-    const double n = double(mColumns);
+    const double n = double(kColumns);
     // The walk's end: the whole segment, or its first kMaxAcrossTiles tiles across.
     const double end = std::min(1.0, kMaxAcrossTiles / std::max(std::abs(d.x()) + std::abs(d.y()), 1e-300));
     // An Amanatides–Woo walk through the columns along t ∈ [0, end], x and y wrapping with the
@@ -110,13 +113,13 @@ double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const
     for (int k = 0; k < 2; ++k) {
         // The start's place in its tile (periodic), in columns: no overflow however far a is.
         const double u = (a[k] - std::floor(a[k])) * n;
-        cell[std::size_t(k)] = std::min(std::int64_t(u), std::int64_t(mColumns) - 1);
+        cell[std::size_t(k)] = std::min(std::int64_t(u), std::int64_t(kColumns) - 1);
         step[std::size_t(k)] = d[k] > 0 ? 1 : -1;
         inc[std::size_t(k)] = d[k] != 0 ? 1 / (std::abs(d[k]) * n) : std::numeric_limits<double>::infinity();
         const double boundary = d[k] > 0 ? double(cell[std::size_t(k)] + 1) : double(cell[std::size_t(k)]);
         next[std::size_t(k)] = d[k] != 0 ? (boundary - u) / (d[k] * n) : std::numeric_limits<double>::infinity();
     }
-    const auto wrap = [m = std::int64_t(mColumns)](std::int64_t i) { return std::size_t(((i % m) + m) % m); };
+    const auto wrap = [m = std::int64_t(kColumns)](std::int64_t i) { return std::size_t(((i % m) + m) % m); };
     const auto product = [&](double t0, double t1) {
         return across[0][wrap(cell[0])] * across[1][wrap(cell[1])] * meanFactor(level, a.z() + t0 * d.z(), a.z() + t1 * d.z());
     };

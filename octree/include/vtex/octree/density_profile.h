@@ -56,6 +56,7 @@ public:
     /// 0.00470, 0.00477 in 0.120, 0.092, 0.089 s (uniform across: 0.00585 in 0.077 s), and the
     /// bush's chord error at levels 0–1 −0.0098, −0.0100, −0.0102.
     static constexpr int kColumns = 16;
+    static_assert(kColumns <= kMinColumns, "a level profiled across spans whole columns of the profile");
 
     /// How many levels (0 … n − 1) a tree whose deepest level is `deepest` profiles in height.
     static constexpr int profiledLevels(int deepest) { return levelsSpanning(deepest, kMinLayers); }
@@ -95,7 +96,6 @@ private:
     }
 
     int mLayers = 0;                          ///< 2^(profile level)
-    int mColumns = 0;                         ///< min(kColumns, mLayers)
     std::vector<std::vector<double>> mFactor;  ///< [level][layer]: p on the layer
     /// [level][k]: ∫ p from z = 0 to the layer boundary k / mLayers, in layer widths (k = 0 … mLayers)
     std::vector<std::vector<double>> mCumulative;
