@@ -180,19 +180,16 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
 class ProfileFactor {
 public:
     ProfileFactor(const MarchVolume& volume, int level, const Eigen::Vector3d& p0, const Eigen::Vector3d& dir)
-        : mLevel(std::clamp(level, 0, std::max(volume.maxLevel(), 0))), mProfile(volume.profile(mLevel)),
-          mAcross(mProfile && mProfile->profilesAcross(mLevel)), mP0(p0), mDir(dir) {}
+        : mLevel(std::clamp(level, 0, std::max(volume.maxLevel(), 0))), mProfile(volume.profile(mLevel)), mP0(p0),
+          mDir(dir) {}
     bool uniform() const { return mProfile == nullptr; }
     double operator()(double s0, double ds) const {
-        if (!mProfile) return 1.0;
-        if (mAcross) return mProfile->meanFactor(mLevel, octree::Vec3(mP0 + s0 * mDir), octree::Vec3(mP0 + (s0 + ds) * mDir));
-        return mProfile->meanFactor(mLevel, mP0.z() + s0 * mDir.z(), mP0.z() + (s0 + ds) * mDir.z());
+        return mProfile ? mProfile->meanFactor(mLevel, octree::Vec3(mP0 + s0 * mDir), octree::Vec3(mP0 + (s0 + ds) * mDir)) : 1.0;
     }
 
 private:
     int mLevel;
     const octree::DensityProfile* mProfile;
-    bool mAcross;
     Eigen::Vector3d mP0, mDir;
 };
 
