@@ -20,8 +20,7 @@ nlohmann::json fidelityJson(const render::SourceFidelity& m, std::uint32_t l) {
             {"transmittance", jsonNumber(c.transmittance)},
             {"error", jsonNumber(c.error())},
             {"fitted", fitted},
-            {"vertical_profile", int(l) < m.profiledLevels},
-            {"across_profile", int(l) < m.profiledAcrossLevels},
+            {"density_profile", int(l) < m.profiledLevels},
             {"beams", {{"mean", jsonNumber(b.mean)}, {"mean_abs", jsonNumber(b.meanAbs)}, {"p95_abs", jsonNumber(b.p95Abs)},
                        {"noise", jsonNumber(b.noise)}}}};
 }
@@ -57,11 +56,8 @@ void printFidelity(const render::SourceFidelity& m, const std::filesystem::path&
             << render::kLevelFitChords << " shell chords, then the same random chords\n";
     const int profileLevel = std::min<int>(octree::DensityProfile::kProfileLevel, int(m.chords.size()) - 1);
     if (m.profiledLevels > 0)
-        out << levelsUpTo(m.profiledLevels) << ": each voxel's density varies with height as level "
-            << profileLevel << "'s layer means do (the vertical profile)\n";
-    if (m.profiledAcrossLevels > 0)
-        out << levelsUpTo(m.profiledAcrossLevels) << ": and across, as level " << profileLevel
-            << "'s column means in x and in y do (the profile across)\n";
+        out << levelsUpTo(m.profiledLevels) << ": each voxel's density varies with height, in x and in y as level "
+            << profileLevel << "'s layer and column means do (the density profile)\n";
 }
 
 }  // namespace vtex::cli

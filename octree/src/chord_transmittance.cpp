@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <array>
+#include <optional>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -39,10 +40,10 @@ double detail::chordDepth(const Octree& tree, const DensityProfile& profile, std
     const double length = delta.norm();
     if (!(length > 0)) return depth;
     const Vec3 w = delta / length;
-    const bool profiled = profile.profiles(int(level));
+    std::optional<DensityProfile::Line> line;
+    if (profile.profiles(int(level))) line.emplace(profile, int(level), a, w);
     forEachVoxelOnSegment(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
-        const double f = profiled ? profile.meanFactor(int(level), Vec3(a + t0 * w), Vec3(a + t1 * w)) : 1.0;
-        depth += voxelExtinction(node, w) * (t1 - t0) * f;
+        depth += voxelExtinction(node, w) * (t1 - t0) * (line ? line->mean(t0, t1) : 1.0);
     });
     return depth;
 }

@@ -63,18 +63,16 @@ DensityProfile::DensityProfile(const Octree& tree) {
         for (int k = 0; k < mLayers; ++k) cumulative[std::size_t(k) + 1] = cumulative[std::size_t(k)] + factor[std::size_t(k)];
         mFactor.push_back(std::move(factor));
         mCumulative.push_back(std::move(cumulative));
-        if (l < profiledAcrossLevels(level)) {
-            // mLayers ≥ kMinColumns ≥ kColumns here: each of the profile's columns is the mean of
-            // `group` of the profile level's, and a voxel spans per / group ≥ 1 of them.
-            const int group = mLayers / kColumns;
-            std::array<std::vector<double>, 2> coarse;
-            for (int ax = 0; ax < 2; ++ax) {
-                coarse[ax].assign(std::size_t(kColumns), 0.0);
-                for (int k = 0; k < mLayers; ++k) coarse[ax][std::size_t(k / group)] += means[ax][std::size_t(k)] / group;
-                coarse[ax] = normalised(coarse[ax], per / group);
-            }
-            mAcross.push_back(std::move(coarse));
+        // Across: columnsAcross(l) columns a side, each the mean of `group` of the profile
+        // level's, and a voxel spans columns >> l of them.
+        const int columns = std::min(mLayers, columnsAcross(l)), group = mLayers / columns;
+        std::array<std::vector<double>, 2> coarse;
+        for (int ax = 0; ax < 2; ++ax) {
+            coarse[ax].assign(std::size_t(columns), 0.0);
+            for (int k = 0; k < mLayers; ++k) coarse[ax][std::size_t(k / group)] += means[ax][std::size_t(k)] / group;
+            coarse[ax] = normalised(coarse[ax], columns >> l);
         }
+        mAcross.push_back(std::move(coarse));
     }
 }
 
@@ -97,45 +95,104 @@ double DensityProfile::meanFactor(int level, double z0, double z1) const {
 }
 
 double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const {
-    if (!profilesAcross(level)) return meanFactor(level, a.z(), b.z());
+    if (!profiles(level)) return 1;
     const Vec3 d = b - a;
-    if (!a.allFinite() || !d.allFinite()) return meanFactor(level, a.z(), b.z());
-    const std::array<std::vector<double>, 2>& across = mAcross[std::size_t(level)];
-    const double n = double(kColumns);
+    const double length = d.norm();
+    if (!a.allFinite() || !std::isfinite(length)) return meanFactor(level, a.z(), b.z());
+    // A point takes the product at it (any direction).
+    return Line(*this, level, a, length > 0 ? Vec3(d / length) : Vec3(0, 0, 1)).mean(0, length);
+}
+
+// An Amanatides–Woo walk through the columns, x and y wrapping with the tile: within a column
+// p_x·p_y is constant and p's mean over the piece's heights comes from the cumulative sums.
+DensityProfile::Line::Line(const DensityProfile& profile, int level, const Vec3& origin, const Vec3& dir)
+    : mProfile(profile), mLevel(level), mOrigin(origin), mDir(dir) {
+    const std::array<std::vector<double>, 2>& across = profile.mAcross[std::size_t(level)];
+    mAcross[0] = across[0].data();
+    mAcross[1] = across[1].data();
+    mFactor = profile.mFactor[std::size_t(level)].data();
+    mCumulative = profile.mCumulative[std::size_t(level)].data();
+    mLayers = double(profile.mLayers);
+    mZ0 = origin.z() * mLayers;
+    mDz = dir.z() * mLayers;
+    mMask = std::int64_t(across[0].size()) - 1;
+    const double n = double(across[0].size());
+    mColumnsPerUnit = (std::abs(dir.x()) + std::abs(dir.y())) * n;
+    mLongest = kMaxAcrossTiles * n / std::max(mColumnsPerUnit, 1e-300);
+    for (std::size_t k = 0; k < 2; ++k) {
+        mStep[k] = dir[int(k)] > 0 ? 1 : -1;
+        mInc[k] = dir[int(k)] != 0 ? 1 / (std::abs(dir[int(k)]) * n) : std::numeric_limits<double>::infinity();
+    }
+}
+
+void DensityProfile::Line::start(double s) {
+    const double n = double(mMask + 1);
+    for (std::size_t k = 0; k < 2; ++k) {
+        // The point's place in its tile (periodic), in columns: no overflow however far it is.
+        const double x = mOrigin[int(k)] + s * mDir[int(k)];
+        const double u = std::isfinite(x) ? (x - std::floor(x)) * n : 0.0;
+        mCell[k] = std::min(std::int64_t(u), mMask);
+        const double boundary = mStep[k] > 0 ? double(mCell[k] + 1) : double(mCell[k]);
+        mNext[k] = mDir[int(k)] != 0 ? s + (boundary - u) / (mDir[int(k)] * n) : std::numeric_limits<double>::infinity();
+    }
+    mAt = s;
+    mStarted = true;
+}
+
+bool DensityProfile::Line::advanceTo(double s) {
+    if (!mStarted || s < mAt || (s - mAt) * mColumnsPerUnit > kRestartColumns) return false;
+    // Within kRestartColumns columns, up to rounding: the cap only guards against it.
+    for (int steps = 0; steps < int(kRestartColumns) + 8; ++steps) {
+        const std::size_t k = mNext[0] <= mNext[1] ? 0 : 1;
+        if (mNext[k] > s) {
+            mAt = s;
+            return true;
+        }
+        mCell[k] += mStep[k];
+        mNext[k] += mInc[k];
+    }
+    return false;
+}
+
+// meanFactor(level, z0, z1) on the line's heights at s0 and s1 (finite), in layers; most pieces
+// of a walk lie in one layer.
+inline double DensityProfile::Line::heightMean(double s0, double s1) const {
+    double a = std::clamp(mZ0 + s0 * mDz, 0.0, mLayers), b = std::clamp(mZ0 + s1 * mDz, 0.0, mLayers);
+    if (a > b) std::swap(a, b);
+    const int last = int(mLayers) - 1;
+    const int i = std::min(int(a), last), j = std::min(int(b), last);
+    if (i == j) return mFactor[i];
+    return (mFactor[i] * (double(i + 1) - a) + (mCumulative[j] - mCumulative[i + 1]) + mFactor[j] * (b - double(j))) / (b - a);
+}
+
+inline double DensityProfile::Line::across() const {
+    return mAcross[0][std::size_t(mCell[0] & mMask)] * mAcross[1][std::size_t(mCell[1] & mMask)];
+}
+
+double DensityProfile::Line::mean(double s0, double s1) {
+    if (!std::isfinite(s0) || !std::isfinite(s1))
+        return mProfile.meanFactor(mLevel, mOrigin.z() + s0 * mDir.z(), mOrigin.z() + s1 * mDir.z());
+    if (s1 < s0) std::swap(s0, s1);
+    if (!advanceTo(s0)) start(s0);
     // The walk's end: the whole segment, or its first kMaxAcrossTiles tiles across.
-    const double end = std::min(1.0, kMaxAcrossTiles / std::max(std::abs(d.x()) + std::abs(d.y()), 1e-300));
-    // An Amanatides–Woo walk through the columns along t ∈ [0, end], x and y wrapping with the
-    // tile: within a column p_x·p_y is constant and p's mean over the piece's heights comes from
-    // the cumulative sums.
-    std::array<std::int64_t, 2> cell;
-    std::array<double, 2> next, inc;
-    std::array<int, 2> step;
-    for (int k = 0; k < 2; ++k) {
-        // The start's place in its tile (periodic), in columns: no overflow however far a is.
-        const double u = (a[k] - std::floor(a[k])) * n;
-        cell[std::size_t(k)] = std::min(std::int64_t(u), std::int64_t(kColumns) - 1);
-        step[std::size_t(k)] = d[k] > 0 ? 1 : -1;
-        inc[std::size_t(k)] = d[k] != 0 ? 1 / (std::abs(d[k]) * n) : std::numeric_limits<double>::infinity();
-        const double boundary = d[k] > 0 ? double(cell[std::size_t(k)] + 1) : double(cell[std::size_t(k)]);
-        next[std::size_t(k)] = d[k] != 0 ? (boundary - u) / (d[k] * n) : std::numeric_limits<double>::infinity();
+    const double end = std::min(s1, s0 + mLongest);
+    if (!(end > s0)) return across() * heightMean(s0, s0);
+    double sum = 0, s = s0, pxy = across();
+    // At most (kMaxAcrossTiles + 2) tiles of column crossings; the bound only guards against rounding.
+    const std::size_t maxSteps = std::size_t((kMaxAcrossTiles + 4) * double(mMask + 1)) + 8;
+    for (std::size_t steps = 0; steps < maxSteps; ++steps) {
+        const std::size_t k = mNext[0] <= mNext[1] ? 0 : 1;
+        if (!(mNext[k] < end)) break;
+        const double t = std::max(mNext[k], s);
+        sum += pxy * heightMean(s, t) * (t - s);
+        s = t;
+        mCell[k] += mStep[k];
+        mNext[k] += mInc[k];
+        pxy = across();
     }
-    const auto wrap = [m = std::int64_t(kColumns)](std::int64_t i) { return std::size_t(((i % m) + m) % m); };
-    const auto product = [&](double t0, double t1) {
-        return across[0][wrap(cell[0])] * across[1][wrap(cell[1])] * meanFactor(level, a.z() + t0 * d.z(), a.z() + t1 * d.z());
-    };
-    double sum = 0, t = 0;
-    // At most (kMaxAcrossTiles + 2)·n column crossings; the bound only guards against rounding.
-    const std::size_t maxSteps = std::size_t((kMaxAcrossTiles + 4) * n) + 8;
-    for (std::size_t steps = 0; steps < maxSteps && t < end; ++steps) {
-        const std::size_t k = next[0] <= next[1] ? 0 : 1;
-        const double t1 = std::clamp(next[k], t, end);
-        sum += product(t, t1) * (t1 - t);
-        t = t1;
-        cell[k] += step[k];
-        next[k] += inc[k];
-    }
-    // end > 0, so t > 0 (a point, d = 0, took the product at it once).
-    return t > 0 ? sum / t : product(0, 0);
+    if (end > s) sum += pxy * heightMean(s, end) * (end - s);
+    mAt = end;
+    return sum / (end - s0);
 }
 
 }  // namespace vtex::octree

@@ -21,7 +21,8 @@ using detail::Segments;
 
 // The point of the chord at which its optical depth (∫ρÂ · scale) reaches `target`; the chord's
 // end where it never does (rounding). Inside a profiled voxel the density is taken as its mean
-// over the segment's heights: the renderer shades such a voxel at its segment's middle, too.
+// over the segment (DensityProfile::meanFactor): the renderer shades such a voxel at its
+// segment's middle, too.
 Vec3 pointAtDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level, const Segments& segments,
                   double scale, double target) {
     double depth = 0;
@@ -30,10 +31,11 @@ Vec3 pointAtDepth(const Octree& tree, const DensityProfile& profile, std::uint32
         // Not a structured binding: Clang 14 (the fuzz build) cannot capture one in a lambda.
         const Vec3& a = segment.first;
         const Vec3 w = (segment.second - a).normalized();
+        std::optional<DensityProfile::Line> line;
+        if (profile.profiles(int(level))) line.emplace(profile, int(level), a, w);
         forEachVoxelOnSegment(tree, level, a, segment.second, [&](const OctreeNode& node, double t0, double t1) {
             if (found) return;
-            const double sigma = scale * detail::voxelExtinction(node, w) *
-                                 profile.meanFactor(int(level), a.z() + t0 * w.z(), a.z() + t1 * w.z());
+            const double sigma = scale * detail::voxelExtinction(node, w) * (line ? line->mean(t0, t1) : 1.0);
             if (sigma > 0 && depth + sigma * (t1 - t0) >= target) found = a + (t0 + (target - depth) / sigma) * w;
             else depth += sigma * (t1 - t0);
         });

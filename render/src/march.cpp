@@ -210,7 +210,7 @@ SegmentTransmittance marchTransmittance(const MarchVolume& volume, double tau, c
     const Eigen::Vector3d dir = delta / length;
     double opticalDepth = 0;
     const double maxDepth = cutoff > 0 ? -std::log(cutoff) : INFINITY;
-    const detail::ProfileFactor profile(volume, level, from, dir);
+    detail::ProfileFactor profile(volume, level, from, dir);
     out.blocks = detail::march(volume, level, from, dir, length, [&](const GridVoxel& voxel, double s, double ds) {
         opticalDepth += tau * voxel.density * voxel.s.projectedArea(dir) * ds * profile(s, ds);
         return opticalDepth < maxDepth;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 
 namespace vtex::render::detail {
 
@@ -174,23 +175,21 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
 }
 
 /// What a march of `volume` at `level` multiplies a voxel's extinction by over the segment
-/// p0 + s·dir, s ∈ [s0, s0 + ds]: the level's density profile's mean factor over the segment
-/// (octree::DensityProfile: over its heights, and across where the level is profiled across),
-/// 1 on a level whose voxels are uniform.
+/// p0 + s·dir, s ∈ [s0, s0 + ds] (dir unit): the level's density profile's mean factor over the
+/// segment (octree::DensityProfile, over its heights and across), 1 on a level whose voxels are
+/// uniform. One walk along the line serves a march's calls front to back (DensityProfile::Line).
 class ProfileFactor {
 public:
-    ProfileFactor(const MarchVolume& volume, int level, const Eigen::Vector3d& p0, const Eigen::Vector3d& dir)
-        : mLevel(std::clamp(level, 0, std::max(volume.maxLevel(), 0))), mProfile(volume.profile(mLevel)), mP0(p0),
-          mDir(dir) {}
-    bool uniform() const { return mProfile == nullptr; }
-    double operator()(double s0, double ds) const {
-        return mProfile ? mProfile->meanFactor(mLevel, octree::Vec3(mP0 + s0 * mDir), octree::Vec3(mP0 + (s0 + ds) * mDir)) : 1.0;
+    ProfileFactor(const MarchVolume& volume, int level, const Eigen::Vector3d& p0, const Eigen::Vector3d& dir) {
+        level = std::clamp(level, 0, std::max(volume.maxLevel(), 0));
+        if (const octree::DensityProfile* profile = volume.profile(level); profile && profile->profiles(level))
+            mLine.emplace(*profile, level, octree::Vec3(p0), octree::Vec3(dir));
     }
+    bool uniform() const { return !mLine; }
+    double operator()(double s0, double ds) { return mLine ? mLine->mean(s0, s0 + ds) : 1.0; }
 
 private:
-    int mLevel;
-    const octree::DensityProfile* mProfile;
-    Eigen::Vector3d mP0, mDir;
+    std::optional<octree::DensityProfile::Line> mLine;
 };
 
 /// The march of `volume` at `level` (clamped to its deepest): through the level's grid, or block

@@ -40,10 +40,9 @@ FaithfulLevels faithfulLevels(const std::vector<octree::ChordTransmittance>& cho
 SourceFidelity measureSourceFidelity(const octree::Octree& tree, const ingest::TriangleMesh& source) {
     const SourceVisibility visibility(source, tree.info.source);
     const auto visible = [&](const Vec3& a, const Vec3& b) { return visibility.visible(a, b); };
-    SourceFidelity out{octree::measureChordTransmittance(tree, visible), octree::measureBeamTransmittance(tree, visible), {}, {}, 0, 0};
+    SourceFidelity out{octree::measureChordTransmittance(tree, visible), octree::measureBeamTransmittance(tree, visible), {}, {}, 0};
     const octree::DensityProfile profile(tree);
     while (profile.profiles(out.profiledLevels)) ++out.profiledLevels;
-    while (profile.profilesAcross(out.profiledAcrossLevels)) ++out.profiledAcrossLevels;
     const FaithfulLevels faithful = faithfulLevels(out.chords, RenderOptions{}.hybridTolerance);
     for (const octree::ShellChordFit& fit :
          octree::fitShellChords(tree, visible, 1, kLevelFitChords, 1, std::uint32_t(faithful.finest + 1)))

@@ -148,7 +148,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
     const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
     double reusedShare = 0;
     const double tau = span.texel.tauAt(level);
-    const ProfileFactor profile(*span.texel.volume, level, span.p0, span.dir);
+    ProfileFactor profile(*span.texel.volume, level, span.p0, span.dir);
     counters.voxels += detail::march(*span.texel.volume, level, span.p0, span.dir, span.length,
         [&](const GridVoxel& voxel, double s, double ds) {
             // 1 − exp rather than expm1 (which takes 1.7× as long here): the opacity is only

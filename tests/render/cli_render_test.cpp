@@ -202,7 +202,7 @@ void flipByteOf(const fs::path& file, const std::string& tag) {
 // `vtex render` reads each level of a .vto when a ray first uses it (octree::openVto): a damaged
 // level no ray uses does not stop it, a damaged level it uses fails cleanly mid-render (exit 3,
 // naming the file and the section, no image), and stats.json says how much of the file it read.
-// A texel of 128³ voxels: its coarse levels take their vertical profile from level 6
+// A texel of 128³ voxels: its coarse levels take their density profile from level 6
 // (octree::DensityProfile), so a view that marches them reads levels 0 … 6, not level 7.
 TEST(RenderCli, ReadsOnlyTheLevelsItUsesAndADamagedUsedLevelExitsThree) {
     const fs::path dir = makeSceneDir("lazy", "", 7);

@@ -1,7 +1,7 @@
-// The coarse levels' density profiles (octree::DensityProfile, issue 13): golden values on a
-// slab and a box derived by hand; on a texel that is uniform across and layered in height, the
-// profiled coarse levels and the finest level are the same medium, and on a separable texel the
-// coarsest two levels (profiled across too) are, so two walks of different levels (the
+// The coarse levels' density profile (octree::DensityProfile, issue 13): golden values on a
+// slab and a box derived by hand; on a texel that is uniform across and layered in height, and
+// on a separable texel, the profiled coarse levels and the finest level are the same medium, so
+// two walks of different levels (the
 // renderer's grid march and the octree's measure) must give the same optical depth; a render
 // marches both profiles; and on the bush they bring every level within issue 13's chord goal.
 #include "bush_field.h"
@@ -48,7 +48,7 @@ std::shared_ptr<const vtex::octree::Octree> box() {
 }
 
 // 64³ voxels of density f(x)·g(y)·h(z), small whole numbers whose products and the levels'
-// means of them floats hold exactly; f and g constant over each of the profile's 16 columns.
+// means of them floats hold exactly; f and g constant over each of levels 0–2's 16 columns.
 std::shared_ptr<const vtex::octree::Octree> separable() {
     return makeOctree(6, [](int x, int y, int z) {
         return std::optional(sphereVoxel(float((1 + (x / 4 * 5) % 3) * (1 + (y / 4 * 3) % 2) * (1 + (z * 7) % 4))));
@@ -156,15 +156,13 @@ TEST(DensityProfile, ProfiledCoarseLevelsOfALayeredTexelAreItsFinestLevel) {
 // across, p_x = 4 on the box's columns and 0 elsewhere, p_y ≡ 1; in height p = 4 on its layers.
 // The product is 16 inside the box (16 · 2/16 = 2, the box's own density) and 0 outside: the
 // separable profile gives the box back exactly. A level-1 voxel spans half the tile: p_x = 2 on
-// the box's columns in the lower half, 1 in the upper half, which is empty. Level 2 is
-// profiled in height only.
-TEST(DensityProfile, SpreadsTheCoarsestVoxelsAcrossAsTheColumnsDo) {
+// the box's columns in the lower half, 1 in the upper half, which is empty. A level-2 voxel is
+// all box or all empty: p ≡ 1.
+TEST(DensityProfile, SpreadsTheCoarseVoxelsAcrossAsTheColumnsDo) {
     using V = vtex::octree::Vec3;
     const DensityProfile p(*box());
-    EXPECT_TRUE(p.profilesAcross(0));
-    EXPECT_TRUE(p.profilesAcross(1));
-    EXPECT_FALSE(p.profilesAcross(2));
-    EXPECT_TRUE(p.profiles(2));
+    EXPECT_TRUE(p.profiles(3));
+    EXPECT_FALSE(p.profiles(4));
     EXPECT_NEAR(p.meanFactor(0, V(0.3, 0.1, 0.3), V(0.4, 0.9, 0.4)), 16, 1e-12);  // inside the box
     EXPECT_NEAR(p.meanFactor(0, V(0.6, 0.1, 0.3), V(0.9, 0.9, 0.4)), 0, 1e-12);   // beside it
     EXPECT_NEAR(p.meanFactor(0, V(0.3, 0.1, 0.6), V(0.4, 0.9, 0.9)), 0, 1e-12);   // above it
@@ -190,24 +188,47 @@ TEST(DensityProfile, SpreadsTheCoarsestVoxelsAcrossAsTheColumnsDo) {
     // The factors are the texel's: on the empty half p_x ≡ 1, and p = 2 on the box's layers (the
     // voxel's density, 0, makes it moot).
     EXPECT_NEAR(p.meanFactor(1, V(0.6, 0.2, 0.3), V(0.9, 0.2, 0.4)), 2, 1e-12);
-    // Level 2 (16 layers a voxel: x ∈ [0.25, 0.5) is one voxel) only in height, where its box
-    // voxels are full: p ≡ 1; the three-point form agrees with the heights' form.
+    // Level 2 (16 layers a voxel: x ∈ [0.25, 0.5) is one voxel, full): p ≡ 1 there and on the
+    // empty voxels, so across a row of them the segment's form is the heights' form.
     EXPECT_NEAR(p.meanFactor(2, V(0.3, 0.2, 0.3), V(0.4, 0.2, 0.4)), 1, 1e-12);
-    EXPECT_EQ(p.meanFactor(2, V(0.3, 0.2, 0.1), V(0.9, 0.2, 0.4)), p.meanFactor(2, 0.1, 0.4));
-    // 32³ voxels: level 0 only (32 columns); 16³: none.
-    EXPECT_TRUE(DensityProfile(*slab(5)).profilesAcross(0));
-    EXPECT_FALSE(DensityProfile(*slab(5)).profilesAcross(1));
-    EXPECT_FALSE(DensityProfile(*slab(4)).profilesAcross(0));
-    EXPECT_EQ(DensityProfile::profiledAcrossLevels(8), 2);
+    EXPECT_NEAR(p.meanFactor(2, V(0.3, 0.2, 0.1), V(0.9, 0.2, 0.4)), p.meanFactor(2, 0.1, 0.4), 1e-12);
+    EXPECT_EQ(p.meanFactor(4, V(0.3, 0.2, 0.1), V(0.9, 0.2, 0.4)), 1);  // not profiled
+    EXPECT_EQ(DensityProfile::profiledLevels(8), 4);
 }
 
-// A separable texel, ρ = f(x)·g(y)·h(z), f and g constant over each of the profile's columns:
-// the column means of each axis are f, g and h up to a constant, so levels 0–1's separable
-// profile gives every voxel of theirs back level 6's density, and the march of levels 0–1 must
-// give level 6's optical depth on any segment, across tiles too; level 2, profiled in height
-// only, must not.
-TEST(DensityProfile, ProfiledCoarsestLevelsOfASeparableTexelAreItsFinestLevel) {
-    expectCoarseLevelsAreTheFinest(separable(), 0.002, 1, -2, 11);
+// A march's walk along one line (DensityProfile::Line) goes on from where its last segment
+// ended; it must give what a walk set up afresh for each segment gives, whether the next segment
+// starts where the last ended, a little ahead (empty space leapt over), further ahead than it
+// walks on (kRestartColumns), or behind: on the separable texel, at every profiled level, along
+// random lines crossing tiles, 1e-12 apart.
+TEST(DensityProfile, AWalkAlongALineIsEachSegmentsWalk) {
+    using V = vtex::octree::Vec3;
+    const DensityProfile p(*separable());
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> unit(0, 1), coordinate(-3, 3), gap(0, 0.02), jump(0.3, 1.5);
+    for (int level = 0; level <= 3; ++level)
+        for (int line = 0; line < 50; ++line) {
+            const V origin(coordinate(rng), coordinate(rng), unit(rng));
+            const V dir = V(coordinate(rng), coordinate(rng), 0.3 * coordinate(rng)).normalized();
+            DensityProfile::Line walk(p, level, origin, dir);
+            double s = 0;
+            for (int k = 0; k < 40; ++k) {
+                const double r = unit(rng);
+                const double s0 = r < 0.5 ? s : r < 0.8 ? s + gap(rng) : r < 0.9 ? s + jump(rng) : std::max(0.0, s - jump(rng));
+                const double s1 = s0 + (r < 0.95 ? gap(rng) : 0.0);
+                const double expected = p.meanFactor(level, V(origin + s0 * dir), V(origin + s1 * dir));
+                EXPECT_NEAR(walk.mean(s0, s1), expected, 1e-12 * expected) << "level " << level << ", line " << line << ", " << k;
+                s = s1;
+            }
+        }
+}
+
+// A separable texel, ρ = f(x)·g(y)·h(z), f and g constant over each of levels 0–2's columns (and
+// so over level 3's): the column means of each axis are f, g and h up to a constant,
+// so levels 0–3's profile gives every voxel of theirs back level 6's density, and their march
+// must give level 6's optical depth on any segment, across tiles too; level 4, uniform, must not.
+TEST(DensityProfile, ProfiledCoarseLevelsOfASeparableTexelAreItsFinestLevel) {
+    expectCoarseLevelsAreTheFinest(separable(), 0.002, 3, -2, 11);
 }
 
 // The camera march carries the profile: a slab texel seen edge-on from a camera in the shell, at
@@ -232,8 +253,8 @@ TEST(DensityProfile, TheCameraMarchSeesTheCoarsestVoxelsMatterAcross) {
 
 // The bush (2000 leaves at 256³, the bush field's texel), as `vtex inspect --source` measures it:
 // each level fitted as the renderer fits it, then random chords of the whole texel. Measured
-// with uniform voxels (616f67e): −0.043, −0.041, −0.024 at levels 0–2; with the vertical profile
-// −0.023, −0.021, −0.012; with levels 0–1 profiled across too −0.010, −0.009 at levels 0–1.
+// with uniform voxels (616f67e): −0.043, −0.041, −0.024 at levels 0–2; with a profile in height
+// alone −0.023, −0.021, −0.012; with the profile in height and across −0.010, −0.009, −0.007.
 // The mean of 4096 chords' T − v has a standard error of about 0.006 here. Every level meets
 // issue 13's 0.02.
 TEST(DensityProfile, BringsEveryLevelOfTheBushWithinTheChordGoal) {

@@ -104,7 +104,7 @@ TEST(LazyLevels, AFarViewReadsOnlyItsCoarseLevelsAndDrawsTheImageOfTheTreeReadWh
     const int deepest = deepestLevelRead(lazy.stats);
     EXPECT_GE(deepest, deepestLevelMarched(lazy.stats));
     EXPECT_GE(deepestLevelMarched(lazy.stats), 1);  // it marched the texel
-    // Levels 0 … 6 at most: the coarsest levels' vertical profile comes from level 6
+    // Levels 0 … 6 at most: the coarse levels' density profile comes from level 6
     // (octree::DensityProfile); the finest two, which hold the bulk, are not read.
     EXPECT_LE(deepest, 6);
     EXPECT_LT(lazy.stats.vtoBytesRead, fileSize / 10);

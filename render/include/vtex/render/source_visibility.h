@@ -72,10 +72,9 @@ struct SourceFidelity {
     std::vector<octree::BeamError> beams;
     std::vector<double> fitScale;
     std::vector<octree::ChordTransmittance> fitted;
-    /// Levels 0 … profiledLevels − 1 carry the texel's vertical profile (octree::DensityProfile),
-    /// in every figure above; levels 0 … profiledAcrossLevels − 1 its profile across as well.
+    /// Levels 0 … profiledLevels − 1 carry the texel's density profile, in height and across
+    /// (octree::DensityProfile), in every figure above.
     int profiledLevels = 0;
-    int profiledAcrossLevels = 0;
 };
 SourceFidelity measureSourceFidelity(const octree::Octree& tree, const ingest::TriangleMesh& source);
 

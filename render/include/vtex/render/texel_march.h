@@ -109,9 +109,9 @@ public:
     int maxLevel() const { return mMaxLevel; }
     /// Level ℓ's grid (built now if need be), or null beyond maxGridLevel or the octree's depth.
     const LevelGrid* grid(int level) const;
-    /// The vertical profile of level ℓ's voxels (octree::DensityProfile; measured now if need
+    /// The density profile of level ℓ's voxels (octree::DensityProfile; measured now if need
     /// be), or null where the level's voxels are uniform: every march multiplies a voxel's
-    /// extinction over a segment by the profile's mean factor over the segment's heights.
+    /// extinction over a segment by the profile's mean factor over the segment.
     const octree::DensityProfile* profile(int level) const {
         return level >= 0 && level < mProfiledLevels ? measuredProfile(level) : nullptr;
     }
