@@ -14,7 +14,6 @@
 
 #include <algorithm>
 #include <array>
-#include <optional>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -40,10 +39,9 @@ double detail::chordDepth(const Octree& tree, const DensityProfile& profile, std
     const double length = delta.norm();
     if (!(length > 0)) return depth;
     const Vec3 w = delta / length;
-    std::optional<DensityProfile::Line> line;
-    if (profile.profiles(int(level))) line.emplace(profile, int(level), a, w);
+    DensityProfile::Line line(profile, int(level), a, w);
     forEachVoxelOnSegment(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
-        depth += voxelExtinction(node, w) * (t1 - t0) * (line ? line->mean(t0, t1) : 1.0);
+        depth += voxelExtinction(node, w) * (t1 - t0) * line.mean(t0, t1);
     });
     return depth;
 }

@@ -46,6 +46,15 @@ std::vector<double> normalised(const std::vector<double>& means, int per) {
     return factor;
 }
 
+// The mean of p (f per layer, cum its cumulative sums) between heights a ≤ b, in layers, within
+// [0, layers]. Summed per layer, not as cum(b) − cum(a): a segment that barely crosses a layer
+// boundary (a near-horizontal ray) keeps its precision.
+inline double layerMean(const double* f, const double* cum, int layers, double a, double b) {
+    const int i = std::min(int(a), layers - 1), j = std::min(int(b), layers - 1);
+    if (i == j) return f[i];
+    return (f[i] * (double(i + 1) - a) + (cum[j] - cum[i + 1]) + f[j] * (b - double(j))) / (b - a);
+}
+
 }  // namespace
 
 DensityProfile::DensityProfile(const Octree& tree) {
@@ -78,24 +87,16 @@ DensityProfile::DensityProfile(const Octree& tree) {
 
 double DensityProfile::meanFactor(int level, double z0, double z1) const {
     if (!profiles(level)) return 1;
-    const std::vector<double>& f = mFactor[std::size_t(level)];
-    const std::vector<double>& cum = mCumulative[std::size_t(level)];
     // In layer widths; NaN heights count as the floor.
     const double n = double(mLayers);
     double a = std::clamp(z0 * n, 0.0, n), b = std::clamp(z1 * n, 0.0, n);
     if (!(a == a)) a = 0;
     if (!(b == b)) b = 0;
     if (a > b) std::swap(a, b);
-    const int i = std::min(int(a), mLayers - 1), j = std::min(int(b), mLayers - 1);
-    if (i == j) return f[std::size_t(i)];
-    // Summed per layer, not as cum(b) − cum(a): a segment that barely crosses a layer boundary
-    // (a near-horizontal ray) keeps its precision.
-    const double inside = cum[std::size_t(j)] - cum[std::size_t(i) + 1];
-    return (f[std::size_t(i)] * (double(i + 1) - a) + inside + f[std::size_t(j)] * (b - double(j))) / (b - a);
+    return layerMean(mFactor[std::size_t(level)].data(), mCumulative[std::size_t(level)].data(), mLayers, a, b);
 }
 
 double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const {
-    if (!profiles(level)) return 1;
     const Vec3 d = b - a;
     const double length = d.norm();
     if (!a.allFinite() || !std::isfinite(length)) return meanFactor(level, a.z(), b.z());
@@ -106,13 +107,14 @@ double DensityProfile::meanFactor(int level, const Vec3& a, const Vec3& b) const
 // An Amanatides–Woo walk through the columns, x and y wrapping with the tile: within a column
 // p_x·p_y is constant and p's mean over the piece's heights comes from the cumulative sums.
 DensityProfile::Line::Line(const DensityProfile& profile, int level, const Vec3& origin, const Vec3& dir)
-    : mProfile(profile), mLevel(level), mOrigin(origin), mDir(dir) {
+    : mOrigin(origin), mDir(dir) {
+    if (!profile.profiles(level)) return;
     const std::array<std::vector<double>, 2>& across = profile.mAcross[std::size_t(level)];
-    mAcross[0] = across[0].data();
-    mAcross[1] = across[1].data();
     mFactor = profile.mFactor[std::size_t(level)].data();
     mCumulative = profile.mCumulative[std::size_t(level)].data();
-    mLayers = double(profile.mLayers);
+    mAcross[0] = across[0].data();
+    mAcross[1] = across[1].data();
+    mLayers = profile.mLayers;
     mZ0 = origin.z() * mLayers;
     mDz = dir.z() * mLayers;
     mMask = std::int64_t(across[0].size()) - 1;
@@ -136,33 +138,28 @@ void DensityProfile::Line::start(double s) {
         mNext[k] = mDir[int(k)] != 0 ? s + (boundary - u) / (mDir[int(k)] * n) : std::numeric_limits<double>::infinity();
     }
     mAt = s;
-    mStarted = true;
 }
 
 bool DensityProfile::Line::advanceTo(double s) {
-    if (!mStarted || s < mAt || (s - mAt) * mColumnsPerUnit > kRestartColumns) return false;
+    if (!(s >= mAt) || (s - mAt) * mColumnsPerUnit > kRestartColumns) return false;
     // Within kRestartColumns columns, up to rounding: the cap only guards against it.
     for (int steps = 0; steps < int(kRestartColumns) + 8; ++steps) {
-        const std::size_t k = mNext[0] <= mNext[1] ? 0 : 1;
+        const std::size_t k = nextAxis();
         if (mNext[k] > s) {
             mAt = s;
             return true;
         }
-        mCell[k] += mStep[k];
-        mNext[k] += mInc[k];
+        cross(k);
     }
     return false;
 }
 
-// meanFactor(level, z0, z1) on the line's heights at s0 and s1 (finite), in layers; most pieces
-// of a walk lie in one layer.
+// p's mean between the line's heights at s0 and s1 (finite), clamped to the texel.
 inline double DensityProfile::Line::heightMean(double s0, double s1) const {
-    double a = std::clamp(mZ0 + s0 * mDz, 0.0, mLayers), b = std::clamp(mZ0 + s1 * mDz, 0.0, mLayers);
+    const double top = double(mLayers);
+    double a = std::clamp(mZ0 + s0 * mDz, 0.0, top), b = std::clamp(mZ0 + s1 * mDz, 0.0, top);
     if (a > b) std::swap(a, b);
-    const int last = int(mLayers) - 1;
-    const int i = std::min(int(a), last), j = std::min(int(b), last);
-    if (i == j) return mFactor[i];
-    return (mFactor[i] * (double(i + 1) - a) + (mCumulative[j] - mCumulative[i + 1]) + mFactor[j] * (b - double(j))) / (b - a);
+    return layerMean(mFactor, mCumulative, mLayers, a, b);
 }
 
 inline double DensityProfile::Line::across() const {
@@ -170,8 +167,10 @@ inline double DensityProfile::Line::across() const {
 }
 
 double DensityProfile::Line::mean(double s0, double s1) {
-    if (!std::isfinite(s0) || !std::isfinite(s1))
-        return mProfile.meanFactor(mLevel, mOrigin.z() + s0 * mDir.z(), mOrigin.z() + s1 * mDir.z());
+    if (!mFactor) return 1;
+    // A non-finite s (no march passes one) takes the floor's layer, as a NaN height does in
+    // meanFactor(level, z0, z1).
+    if (!std::isfinite(s0) || !std::isfinite(s1)) return mFactor[0];
     if (s1 < s0) std::swap(s0, s1);
     if (!advanceTo(s0)) start(s0);
     // The walk's end: the whole segment, or its first kMaxAcrossTiles tiles across.
@@ -181,13 +180,12 @@ double DensityProfile::Line::mean(double s0, double s1) {
     // At most (kMaxAcrossTiles + 2) tiles of column crossings; the bound only guards against rounding.
     const std::size_t maxSteps = std::size_t((kMaxAcrossTiles + 4) * double(mMask + 1)) + 8;
     for (std::size_t steps = 0; steps < maxSteps; ++steps) {
-        const std::size_t k = mNext[0] <= mNext[1] ? 0 : 1;
+        const std::size_t k = nextAxis();
         if (!(mNext[k] < end)) break;
         const double t = std::max(mNext[k], s);
         sum += pxy * heightMean(s, t) * (t - s);
         s = t;
-        mCell[k] += mStep[k];
-        mNext[k] += mInc[k];
+        cross(k);
         pxy = across();
     }
     if (end > s) sum += pxy * heightMean(s, end) * (end - s);

@@ -31,11 +31,10 @@ Vec3 pointAtDepth(const Octree& tree, const DensityProfile& profile, std::uint32
         // Not a structured binding: Clang 14 (the fuzz build) cannot capture one in a lambda.
         const Vec3& a = segment.first;
         const Vec3 w = (segment.second - a).normalized();
-        std::optional<DensityProfile::Line> line;
-        if (profile.profiles(int(level))) line.emplace(profile, int(level), a, w);
+        DensityProfile::Line line(profile, int(level), a, w);
         forEachVoxelOnSegment(tree, level, a, segment.second, [&](const OctreeNode& node, double t0, double t1) {
             if (found) return;
-            const double sigma = scale * detail::voxelExtinction(node, w) * (line ? line->mean(t0, t1) : 1.0);
+            const double sigma = scale * detail::voxelExtinction(node, w) * line.mean(t0, t1);
             if (sigma > 0 && depth + sigma * (t1 - t0) >= target) found = a + (t0 + (target - depth) / sigma) * w;
             else depth += sigma * (t1 - t0);
         });

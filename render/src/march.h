@@ -182,10 +182,9 @@ class ProfileFactor {
 public:
     ProfileFactor(const MarchVolume& volume, int level, const Eigen::Vector3d& p0, const Eigen::Vector3d& dir) {
         level = std::clamp(level, 0, std::max(volume.maxLevel(), 0));
-        if (const octree::DensityProfile* profile = volume.profile(level); profile && profile->profiles(level))
+        if (const octree::DensityProfile* profile = volume.profile(level))
             mLine.emplace(*profile, level, octree::Vec3(p0), octree::Vec3(dir));
     }
-    bool uniform() const { return !mLine; }
     double operator()(double s0, double ds) { return mLine ? mLine->mean(s0, s0 + ds) : 1.0; }
 
 private:

@@ -26,7 +26,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace vtex::octree {
@@ -47,9 +49,11 @@ public:
     /// Across, level l keeps max(kTileColumns, kVoxelColumns·2^l) columns a side (at most the
     /// profile level's): 16 at levels 0–2, 32 at level 3, so a level-0 voxel sees the tile on 16
     /// columns and a level-3 voxel on 4 of its own. More columns cost a march's walk more
-    /// crossings: 8 per voxel at every level gave the far view RMSE 0.002606 against 0.002610
-    /// and a largest bias of 3.3 % against 3.4 %, in 14 % more time against 8 %; 8 columns at
-    /// level 0 raised its chord error to −0.0102 and 4 to −0.0142 (from −0.0100).
+    /// crossings. Set to 8 and 8 (8 per voxel at every level) and rebuilt, the far view gave RMSE
+    /// 0.002606 against 0.002610 and a largest bias of 3.3 % against 3.4 %, in 14 % more time
+    /// against 8 %; 8 and 4 columns at level 0 raised its chord error to −0.0102 and −0.0142
+    /// (from −0.0100). Commands and conditions: docs/render.md, "The coarse levels' density
+    /// profile".
     static constexpr int kTileColumns = 16;
     static constexpr int kVoxelColumns = 4;
     static constexpr int columnsAcross(int level) { return std::max(kTileColumns, kVoxelColumns << level); }
@@ -88,38 +92,40 @@ public:
     /// The profile of `level` along one line, origin + s·dir (reference units, dir unit):
     /// mean(s0, s1) is meanFactor(level, origin + s0·dir, origin + s1·dir), taken by a walk
     /// through the columns that goes on from where the last call ended. A march asks for its
-    /// voxels front to back, so each call walks only the columns its own segment crosses (the
-    /// one-segment form sets a walk up per segment: a floor and four divisions). An earlier s0,
-    /// or one more than kRestartColumns columns ahead, sets the walk up again.
+    /// voxels front to back, so each call walks only the columns its own segment crosses instead
+    /// of setting a walk up (floors and divisions) per voxel. An earlier s0, or one more than
+    /// kRestartColumns columns ahead, sets the walk up again. 1 at a level not profiled.
     class Line {
     public:
-        /// `level` must be profiled.
         Line(const DensityProfile& profile, int level, const Vec3& origin, const Vec3& dir);
         double mean(double s0, double s1);
         static constexpr double kRestartColumns = 16;
 
     private:
         void start(double s);
-        bool advanceTo(double s);  ///< false: too far ahead (start instead)
+        bool advanceTo(double s);  ///< false: behind, or too far ahead (start instead)
+        std::size_t nextAxis() const { return mNext[0] <= mNext[1] ? 0 : 1; }  ///< whose boundary comes first
+        void cross(std::size_t k) {  ///< into the next column along axis k
+            mCell[k] += mStep[k];
+            mNext[k] += mInc[k];
+        }
         double across() const;                         ///< p_x·p_y in the current column
         double heightMean(double s0, double s1) const;  ///< p's mean between the line's heights at s0, s1
 
-        const DensityProfile& mProfile;
-        int mLevel;
+        const double* mFactor = nullptr;  ///< p per layer; null: the level is not profiled
+        const double* mCumulative = nullptr;  ///< its cumulative sums
+        const double* mAcross[2] = {nullptr, nullptr};
+        int mLayers = 0;
         Vec3 mOrigin, mDir;
-        const double* mAcross[2];
-        const double* mFactor;      ///< p per layer
-        const double* mCumulative;  ///< its cumulative sums
-        double mLayers;             ///< how many
-        double mZ0, mDz;            ///< the line's height at s = 0 and per unit of s, in layers
-        std::int64_t mMask;          ///< columns − 1 (a power of two less one)
+        double mZ0 = 0, mDz = 0;     ///< the line's height at s = 0 and per unit of s, in layers
+        std::int64_t mMask = 0;      ///< columns − 1 (a power of two less one)
         double mColumnsPerUnit = 0;  ///< columns crossed per unit of s, x and y together
         double mLongest = 0;         ///< the length of kMaxAcrossTiles tiles across
         std::array<std::int64_t, 2> mCell{};
         std::array<double, 2> mNext{}, mInc{};
         std::array<int, 2> mStep{};
-        double mAt = 0;  ///< where the walk stands (the current columns hold it)
-        bool mStarted = false;
+        /// Where the walk stands (the current columns hold it); +∞ before the first call.
+        double mAt = std::numeric_limits<double>::infinity();
     };
 
 private:
