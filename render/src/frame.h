@@ -23,6 +23,7 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vtex::render::detail {
@@ -295,46 +296,54 @@ inline float storedRadiance(double radiance, Counters& counters) {
 
 /// Renders the rows [frame.rowBegin, frame.rowEnd) of the full image with `pixel(x, y, counters)`
 /// (y the full image's row) into `image` (those rows alone, image row 0 = frame.rowBegin), in
-/// 16×16 tiles on `threads` TBB workers, with progress per tile. A pixel's value depends on its
+/// 16×16 tiles on the current arena's TBB workers (withThreads), with progress per tile. A pixel's value depends on its
 /// own (x, y) alone, not on the thread that computes it nor on which other pixels are rendered:
 /// row ranges rendered apart stack into the whole render exactly (tests/render/row_range_test.cpp).
 template <class PixelFunction>
-void renderTiles(Image& image, const ImageFrame& frame, int threads, Progress& progress,
-                 std::vector<Counters>& tileCounters, PixelFunction&& pixel) {
+void renderTiles(Image& image, const ImageFrame& frame, Progress& progress, std::vector<Counters>& tileCounters,
+                 PixelFunction&& pixel) {
     constexpr int kTile = 16;
     const int width = image.width, rows = image.height;
     const int tilesX = (width + kTile - 1) / kTile, tilesY = (rows + kTile - 1) / kTile;
     const int tiles = tilesX * tilesY;
     tileCounters.assign(std::size_t(tiles), Counters{});
     progress.start("render", std::uint64_t(tiles));
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-        tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
-            for (int tileIndex = range.begin(); tileIndex != range.end(); ++tileIndex) {
-                if (progress.wasInterrupted()) return;
-                Counters& counters = tileCounters[std::size_t(tileIndex)];
-                const int x0 = (tileIndex % tilesX) * kTile, y0 = (tileIndex / tilesX) * kTile;
-                for (int y = y0; y < std::min(y0 + kTile, rows); ++y) {
-                    for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
-                        const PixelValue value = pixel(x, frame.rowBegin + y, counters);
-                        const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
-                        for (int c = 0; c < 3; ++c) image.rgba[4 * i + std::size_t(c)] = storedRadiance(value.radiance[c], counters);
-                        image.rgba[4 * i + 3] = float(value.alpha);
-                        if (image.hasAovs()) {
-                            image.depth[i] = float(value.depth);
-                            image.level[i] = float(value.level);
-                        }
+    tbb::parallel_for(tbb::blocked_range<int>(0, tiles, 1), [&](const tbb::blocked_range<int>& range) {
+        for (int tileIndex = range.begin(); tileIndex != range.end(); ++tileIndex) {
+            if (progress.wasInterrupted()) return;
+            Counters& counters = tileCounters[std::size_t(tileIndex)];
+            const int x0 = (tileIndex % tilesX) * kTile, y0 = (tileIndex / tilesX) * kTile;
+            for (int y = y0; y < std::min(y0 + kTile, rows); ++y) {
+                for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
+                    const PixelValue value = pixel(x, frame.rowBegin + y, counters);
+                    const std::size_t i = std::size_t(y) * std::size_t(width) + std::size_t(x);
+                    for (int c = 0; c < 3; ++c) image.rgba[4 * i + std::size_t(c)] = storedRadiance(value.radiance[c], counters);
+                    image.rgba[4 * i + 3] = float(value.alpha);
+                    if (image.hasAovs()) {
+                        image.depth[i] = float(value.depth);
+                        image.level[i] = float(value.level);
                     }
                 }
-                progress.advance(1);
             }
-        });
+            progress.advance(1);
+        }
     });
     progress.finish();
 }
 
 inline int resolveThreads(int requested) {
     return requested > 0 ? requested : tbb::this_task_arena::max_concurrency();
+}
+
+/// Runs f, a whole render (what its load measures, in parallel, and its tiles), in an arena of
+/// `threads` (ImageOptions::threads; 0: the caller's arena's concurrency), so that the option
+/// bounds every parallel loop of the render and not only the tiles': `vtex render --threads 1`
+/// (two renders side by side on two cores, say) took every core while the texels' chord
+/// measures ran at load.
+template <class F>
+auto withThreads(int threads, F&& f) {
+    tbb::task_arena arena(resolveThreads(threads));
+    return arena.execute(std::forward<F>(f));
 }
 
 }  // namespace vtex::render::detail

@@ -189,7 +189,10 @@ std::uint64_t estimateReferenceMemory(const Scene& scene, const ReferenceOptions
     return detail::imageAndSceneMemory(scene, options);
 }
 
-RenderResult renderReference(const Scene& scene, const ReferenceOptions& options, Progress& progress) {
+namespace {
+
+// renderReference in the arena of withThreads.
+RenderResult renderReferenceInArena(const Scene& scene, const ReferenceOptions& options, Progress& progress) {
     const auto loadStart = std::chrono::steady_clock::now();
     const detail::ImageFrame frame = detail::imageFrame(scene, options);
     const int width = frame.width, height = frame.height;
@@ -232,7 +235,7 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     const int threads = detail::resolveThreads(options.threads);
     std::vector<Counters> tileCounters;
     const int samples = strata * strata;
-    detail::renderTiles(image, frame, threads, progress, tileCounters, [&](int x, int y, Counters& counters) {
+    detail::renderTiles(image, frame, progress, tileCounters, [&](int x, int y, Counters& counters) {
         detail::PixelValue value;
         double depth = 0;
         int depthCount = 0;
@@ -265,6 +268,12 @@ RenderResult renderReference(const Scene& scene, const ReferenceOptions& options
     result.image = std::move(image);
     result.warnings = detail::renderWarnings(scene, tileCounters);
     return result;
+}
+
+}  // namespace
+
+RenderResult renderReference(const Scene& scene, const ReferenceOptions& options, Progress& progress) {
+    return detail::withThreads(options.threads, [&] { return renderReferenceInArena(scene, options, progress); });
 }
 
 }  // namespace vtex::render

@@ -290,7 +290,10 @@ std::uint64_t estimateRenderMemory(const Scene& scene, const RenderOptions& opti
     return detail::imageAndSceneMemory(scene, options) + latticeMemoryCap(scene, options);
 }
 
-RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progress& progress) {
+namespace {
+
+// renderScene in the arena of withThreads.
+RenderResult renderSceneInArena(const Scene& scene, const RenderOptions& options, Progress& progress) {
     const auto loadStart = std::chrono::steady_clock::now();
     RenderResult result;
     const detail::ImageFrame frame = detail::imageFrame(scene, options);
@@ -312,7 +315,7 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
     Image image(width, frame.rows(), options.aovs);
     const int threads = detail::resolveThreads(options.threads);
     std::vector<Counters> tileCounters;
-    detail::renderTiles(image, frame, threads, progress, tileCounters, [&](int x, int y, Counters& counters) {
+    detail::renderTiles(image, frame, progress, tileCounters, [&](int x, int y, Counters& counters) {
         detail::PixelValue value;
         double depth = 0, levelSum = 0, levelWeight = 0;
         int depthCount = 0;
@@ -357,6 +360,12 @@ RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progr
                                   "had got to: the image may differ slightly with the threads or the rows rendered "
                                   "(docs/render.md, \"Shadows\")");
     return result;
+}
+
+}  // namespace
+
+RenderResult renderScene(const Scene& scene, const RenderOptions& options, Progress& progress) {
+    return detail::withThreads(options.threads, [&] { return renderSceneInArena(scene, options, progress); });
 }
 
 void writeStatsJson(const RenderStats& s, const std::filesystem::path& file) {

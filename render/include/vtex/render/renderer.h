@@ -43,7 +43,7 @@ struct ImageOptions {
     int width = 0;        ///< 0: the scene's camera.width
     int height = 0;       ///< 0: the scene's camera.height
     int spp = 1;          ///< samples per pixel (a √spp × √spp grid, rounded up)
-    int threads = 0;      ///< 0: all hardware threads
+    int threads = 0;      ///< the whole render's, load included; 0: all hardware threads
     bool aovs = false;    ///< fill Image::depth (and, texel renders, Image::level)
     /// Render only the rows [rowBegin, rowEnd) of the full image (row 0 at the top): the camera
     /// rays and every pixel's samples are those of the full image, and the Image holds just these

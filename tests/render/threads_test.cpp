@@ -1,0 +1,75 @@
+// ImageOptions::threads bounds the whole render, load included: the texels' chord measures (the
+// level fit, the hybrid's switch, the lit fractions) run in parallel loops of their own, which
+// ran in the caller's arena on every core whatever the option said (`vtex render --threads 1`
+// took both of this machine's). A TBB observer of the caller's arena sees every worker that
+// joins it: none may while a render runs, which then runs in an arena of its own of `threads`
+// (stats.threads).
+#include "bush_field.h"
+
+#include <vtex/render/reference.h>
+
+#include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_scheduler_observer.h>
+
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+namespace {
+
+using namespace vtex::render;
+using namespace vtex::render::test;
+
+// Counts the workers that join the arena of the thread that makes it (oneTBB's observer).
+class WorkerCount : public tbb::task_scheduler_observer {
+public:
+    WorkerCount() { observe(true); }
+    ~WorkerCount() override { observe(false); }
+    void on_scheduler_entry(bool isWorker) override {
+        if (isWorker) ++mWorkers;
+    }
+    int workers() const { return mWorkers.load(); }
+
+private:
+    std::atomic<int> mWorkers{0};
+};
+
+TEST(Threads, ARenderAskedForOneThreadRunsItsLoadAndTilesOnOne) {
+    if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: no worker could join anyway";
+    const Scene scene = bushField(Eigen::Vector3d(0.5, -3, 3), 24);
+    RenderOptions options;
+    options.threads = 1;
+    {
+        WorkerCount count;
+        const RenderResult result = renderQuiet(scene, options);
+        EXPECT_EQ(result.stats.threads, 1);
+        EXPECT_GT(result.stats.voxelsVisited, 0u);
+        EXPECT_EQ(count.workers(), 0);
+    }
+    // The observer does see workers that join this arena (the test would catch nothing
+    // otherwise): a parallel loop as long as the render's measures.
+    WorkerCount count;
+    std::atomic<int> finite{0};
+    tbb::parallel_for(0, 1 << 12, [&](int i) {
+        double x = i;
+        for (int k = 0; k < 20000; ++k) x = x * 0.999 + 1;
+        if (std::isfinite(x)) ++finite;
+    });
+    EXPECT_EQ(finite.load(), 1 << 12);
+    EXPECT_GT(count.workers(), 0);
+}
+
+TEST(Threads, AReferenceAskedForOneThreadRunsOnOne) {
+    if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: no worker could join anyway";
+    const Scene scene = bushField(Eigen::Vector3d(0.5, -3, 3), 24);
+    ReferenceOptions options;
+    options.threads = 1;
+    vtex::NullProgress progress;
+    WorkerCount count;
+    const RenderResult result = renderReference(scene, options, progress);
+    EXPECT_EQ(result.stats.threads, 1);
+    EXPECT_EQ(count.workers(), 0);
+}
+
+}  // namespace
