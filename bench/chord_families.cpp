@@ -108,7 +108,7 @@ Family trace(const octree::Octree& tree, const octree::ChordVisibility& visible,
                 if (!(len > 0)) continue;
                 const Vec3 u = (b - a) / len;
                 octree::forEachVoxelOnSegment(tree, std::uint32_t(l), a, b, [&](const octree::OctreeNode& node, double t0, double t1) {
-                    const double e = octree::detail::voxelExtinction(node, u) * (t1 - t0);
+                    const double e = octree::voxelExtinction(node, u) * (t1 - t0);
                     const double z = a.z() + u.z() * 0.5 * (t0 + t1);  // z is linear along the piece
                     double p = 0;  // the data profile, averaged over the piece at 16 points
                     for (int q = 0; q < 16; ++q) p += profile(layers, l, a.z() + u.z() * (t0 + (q + 0.5) / 16 * (t1 - t0))) / 16;

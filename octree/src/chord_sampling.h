@@ -2,9 +2,10 @@
 // lit_fractions.cpp (and bench/chord_families.cpp): a counter-based generator (a pure function of
 // seed and chord index, so that a measure does not depend on the thread count), the isotropic
 // chords of inspect's measure, the shell's cosine-weighted directions, the
-// tiling of a segment into unit-cube pieces, and the optical depth of a level along a segment.
+// tiling of a segment into unit-cube pieces.
 #pragma once
 
+#include <vtex/octree/chord_medium.h>
 #include <vtex/octree/octree.h>
 #include <vtex/octree/density_profile.h>
 #include <vtex/octree/voxel.h>
@@ -98,20 +99,10 @@ inline Segments randomShellChord(ChordRng& rng) {
     return tiledSegments(a, Vec3(up.x(), up.y(), -up.z()) / up.z());  // down to z = 0
 }
 
-/// A voxel's extinction per unit length along the unit direction w, before τ: ρ·Â(w).
-inline double voxelExtinction(const OctreeNode& node, const Vec3& w) {
-    return double(node.data.density) * unpackS(node.data).projectedArea(w);
-}
-
-/// The optical depth ∫ρÂ of the segment a → b through `level` of `tree`, its coarse voxels'
-/// densities varying with height as `profile` says (chord_transmittance.cpp).
-double chordDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level, const Vec3& a, const Vec3& b);
-
-/// The same over a chord cut into segments.
-inline double chordDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level,
-                         const Segments& segments) {
+/// The optical depth of `level` along a chord cut into segments (ChordMedium::depth of each).
+inline double chordDepth(const ChordMedium& medium, std::uint32_t level, const Segments& segments) {
     double depth = 0;
-    for (const auto& [a, b] : segments) depth += chordDepth(tree, profile, level, a, b);
+    for (const auto& [a, b] : segments) depth += medium.depth(level, a, b);
     return depth;
 }
 

@@ -24,7 +24,6 @@ namespace vtex::octree {
 namespace {
 
 using detail::ChordRng;
-using detail::chordDepth;
 using detail::mix64;
 using detail::Chord;
 using detail::randomChord;
@@ -32,63 +31,29 @@ using detail::randomShellChord;
 
 }  // namespace
 
-double detail::chordDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level, const Vec3& a,
-                          const Vec3& b) {
-    double depth = 0;
-    const Vec3 delta = b - a;
-    const double length = delta.norm();
-    if (!(length > 0)) return depth;
-    const Vec3 w = delta / length;
-    DensityProfile::Line line(profile, int(level), a, w);
-    forEachVoxelOnSegment(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
-        depth += voxelExtinction(node, w) * (t1 - t0) * line.mean(t0, t1);
-    });
-    return depth;
-}
-
 void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b,
                            const std::function<void(const OctreeNode&, double, double)>& visit) {
     tree.loadLevels(level);  // a tree opened with openVto reads the level now if need be
     if (tree.levels.empty() || tree.levels[0].empty() || level >= tree.levels.size()) return;
     OctreeCursor cursor(tree);
-    const double n = double(std::uint64_t(1) << level);
-    const Vec3 delta = b - a;
-    const double length = delta.norm();
-    if (!(length > 0) || !a.allFinite() || !b.allFinite()) return;
-    const Vec3 w = delta / length;
-    std::array<std::int64_t, 3> cell, step;
-    std::array<double, 3> next, inc;
-    for (int k = 0; k < 3; ++k) {
-        const double p = std::clamp(a[k] * n, 0.0, n - 1e-9);
-        cell[std::size_t(k)] = std::int64_t(p);
-        step[std::size_t(k)] = w[k] > 0 ? 1 : -1;
-        const bool moves = std::abs(w[k]) > 1e-300;
-        inc[std::size_t(k)] = moves ? 1 / (std::abs(w[k]) * n) : std::numeric_limits<double>::infinity();
-        const double boundary = w[k] > 0 ? double(cell[std::size_t(k)] + 1) : double(cell[std::size_t(k)]);
-        next[std::size_t(k)] = moves ? (boundary / n - a[k]) / w[k] : std::numeric_limits<double>::infinity();
-    }
-    const std::int64_t last = std::int64_t(n) - 1;
-    double t = 0;
-    while (t < length) {
-        const std::size_t k = next[0] <= next[1] && next[0] <= next[2] ? 0 : next[1] <= next[2] ? 1 : 2;
-        const double t1 = std::min(next[k], length);
-        if (const Located found = cursor.locate(int(level), std::uint32_t(cell[0]), std::uint32_t(cell[1]),
-                                                std::uint32_t(cell[2]));
-            found.node)
-            visit(*found.node, t, t1);
-        t = t1;
-        cell[k] += step[k];
-        next[k] += inc[k];
-        if (cell[k] < 0 || cell[k] > last) break;
-    }
+    detail::walkVoxels(
+        level, a, b,
+        [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+            return cursor.locate(int(level), std::uint32_t(x), std::uint32_t(y), std::uint32_t(z)).node;
+        },
+        [&](const OctreeNode& node, double t0, double t1) {
+            visit(node, t0, t1);
+            return true;
+        });
 }
 
 namespace {
 
 // measureChordTransmittance's one body: levels 0 … levels − 1, level l at τ = tauAt(l).
-std::vector<ChordTransmittance> measureChords(const Octree& tree, const ChordVisibility& visible,
+std::vector<ChordTransmittance> measureChords(const ChordMedium& medium, const ChordVisibility& visible,
                                               const std::function<double(std::size_t)>& tauAt, std::size_t levels,
                                               int chords, std::uint64_t seed, const EnoughLevels& enough) {
+    const Octree& tree = medium.tree();
     std::vector<ChordTransmittance> out(std::min(levels, tree.levels.size()));
     if (chords <= 0) return out;
     const std::size_t count = std::size_t(chords);
@@ -104,13 +69,12 @@ std::vector<ChordTransmittance> measureChords(const Octree& tree, const ChordVis
     double visibility = 0;
     for (char m : misses) visibility += m;
     visibility /= double(count);
-    const DensityProfile profile(tree);
     for (std::size_t level = 0; level < out.size(); ++level) {
         const double tau = tauAt(level);
         std::vector<double> transmittance(count);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t j = r.begin(); j != r.end(); ++j)
-                transmittance[j] = std::exp(-tau * chordDepth(tree, profile, std::uint32_t(level), lines[j].a, lines[j].b));
+                transmittance[j] = std::exp(-tau * medium.depth(std::uint32_t(level), lines[j].a, lines[j].b));
         });
         double sum = 0;  // in chord order: the same whatever the schedule
         for (double t : transmittance) sum += t;
@@ -125,21 +89,22 @@ std::vector<ChordTransmittance> measureChords(const Octree& tree, const ChordVis
 
 }  // namespace
 
-std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+std::vector<ChordTransmittance> measureChordTransmittance(const ChordMedium& medium, const ChordVisibility& visible,
                                                           double tau, int chords, std::uint64_t seed) {
-    return measureChordTransmittance(tree, visible, tau, chords, seed, {});
+    return measureChordTransmittance(medium, visible, tau, chords, seed, {});
 }
 
-std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+std::vector<ChordTransmittance> measureChordTransmittance(const ChordMedium& medium, const ChordVisibility& visible,
                                                           double tau, int chords, std::uint64_t seed,
                                                           const EnoughLevels& enough) {
-    return measureChords(tree, visible, [tau](std::size_t) { return tau; }, tree.levels.size(), chords, seed, enough);
+    return measureChords(medium, visible, [tau](std::size_t) { return tau; }, medium.tree().levels.size(), chords, seed,
+                         enough);
 }
 
-std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+std::vector<ChordTransmittance> measureChordTransmittance(const ChordMedium& medium, const ChordVisibility& visible,
                                                           const std::vector<double>& tauPerLevel, int chords,
                                                           std::uint64_t seed) {
-    return measureChords(tree, visible, [&](std::size_t l) { return tauPerLevel[l]; }, tauPerLevel.size(), chords, seed,
+    return measureChords(medium, visible, [&](std::size_t l) { return tauPerLevel[l]; }, tauPerLevel.size(), chords, seed,
                          {});
 }
 
@@ -188,13 +153,12 @@ struct ShellChords {
     std::vector<char> misses;
     std::vector<std::vector<double>> depth;  ///< [level][chord]
 };
-ShellChords traceShellChords(const Octree& tree, const ChordVisibility& visible, int chords, std::uint64_t seed,
+ShellChords traceShellChords(const ChordMedium& medium, const ChordVisibility& visible, int chords, std::uint64_t seed,
                              std::size_t firstLevel, std::size_t endLevel) {
     const std::size_t count = std::size_t(std::max(chords, 0));
     ShellChords out;
     out.misses.assign(count, 0);
     out.depth.assign(endLevel - firstLevel, std::vector<double>(count, 0.0));
-    const DensityProfile profile(tree);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j != r.end(); ++j) {
             ChordRng rng{mix64(seed ^ mix64(0x5E11ull + std::uint64_t(j)))};
@@ -203,7 +167,7 @@ ShellChords traceShellChords(const Octree& tree, const ChordVisibility& visible,
             for (const auto& [a, b] : segments) misses = misses && visible(a, b);
             out.misses[j] = misses ? 1 : 0;
             for (std::size_t level = firstLevel; level < endLevel; ++level)
-                for (const auto& [a, b] : segments) out.depth[level - firstLevel][j] += chordDepth(tree, profile, std::uint32_t(level), a, b);
+                for (const auto& [a, b] : segments) out.depth[level - firstLevel][j] += medium.depth(std::uint32_t(level), a, b);
         }
     });
     return out;
@@ -223,11 +187,12 @@ double meanMisses(const std::vector<char>& misses) {
 
 }  // namespace
 
-std::vector<ShellChordFit> fitShellChords(const Octree& tree, const ChordVisibility& visible, double tau, int chords,
+std::vector<ShellChordFit> fitShellChords(const ChordMedium& medium, const ChordVisibility& visible, double tau, int chords,
                                           std::uint64_t seed, std::uint32_t finestLevel) {
+    const Octree& tree = medium.tree();
     std::vector<ShellChordFit> out(std::min(tree.levels.size(), std::size_t(finestLevel) + 1));
     if (chords <= 0 || out.empty()) return out;
-    const ShellChords traced = traceShellChords(tree, visible, chords, seed, 0, out.size());
+    const ShellChords traced = traceShellChords(medium, visible, chords, seed, 0, out.size());
     const double visibility = meanMisses(traced.misses);
     for (std::size_t level = 0; level < out.size(); ++level) {
         const std::vector<double>& depth = traced.depth[level];
@@ -248,23 +213,24 @@ std::vector<ShellChordFit> fitShellChords(const Octree& tree, const ChordVisibil
     return out;
 }
 
-ShellChordFit measureShellChords(const Octree& tree, const ChordVisibility& visible, std::uint32_t level, double scale,
+ShellChordFit measureShellChords(const ChordMedium& medium, const ChordVisibility& visible, std::uint32_t level, double scale,
                                  double tau, int chords, std::uint64_t seed) {
+    const Octree& tree = medium.tree();
     ShellChordFit out;
     if (chords <= 0 || level >= tree.levels.size()) return out;
-    const ShellChords traced = traceShellChords(tree, visible, chords, seed, level, level + 1);
+    const ShellChords traced = traceShellChords(medium, visible, chords, seed, level, level + 1);
     out.visibility = meanMisses(traced.misses);
     out.transmittance = meanTransmittance(traced.depth[0], tau * scale);
     out.scale = scale;
     return out;
 }
 
-std::vector<BeamError> measureBeamTransmittance(const Octree& tree, const ChordVisibility& visible, double tau,
+std::vector<BeamError> measureBeamTransmittance(const ChordMedium& medium, const ChordVisibility& visible, double tau,
                                                 int beams, int chordsPerBeam, std::uint64_t seed) {
+    const Octree& tree = medium.tree();
     std::vector<BeamError> out(tree.levels.size());
     const int grid = int(std::sqrt(double(std::max(chordsPerBeam, 1))));
     if (beams <= 0 || grid <= 0) return out;
-    const DensityProfile profile(tree);
     for (std::size_t level = 0; level < tree.levels.size(); ++level) {
         std::vector<double> error(std::size_t(beams), 0.0), noise(std::size_t(beams), 0.0);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, std::size_t(beams), 4), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -280,7 +246,7 @@ std::vector<BeamError> measureBeamTransmittance(const Octree& tree, const ChordV
                                        beam.side * ((v + rng.next()) / grid) * beam.up;
                         const Vec3 b = a + beam.length * beam.direction;
                         missing += visible(a, b) ? 1 : 0;
-                        transmitted += std::exp(-tau * chordDepth(tree, profile, std::uint32_t(level), a, b));
+                        transmitted += std::exp(-tau * medium.depth(std::uint32_t(level), a, b));
                     }
                 const double n = double(grid) * double(grid), f = missing / n;
                 error[j] = transmitted / n - f;

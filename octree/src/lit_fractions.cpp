@@ -15,7 +15,6 @@ namespace vtex::octree {
 namespace {
 
 using detail::ChordRng;
-using detail::chordDepth;
 using detail::mix64;
 using detail::Segments;
 
@@ -23,20 +22,20 @@ using detail::Segments;
 // end where it never does (rounding). Inside a profiled voxel the density is taken as its mean
 // over the segment (DensityProfile::meanFactor): the renderer shades such a voxel at its
 // segment's middle, too.
-Vec3 pointAtDepth(const Octree& tree, const DensityProfile& profile, std::uint32_t level, const Segments& segments,
-                  double scale, double target) {
+Vec3 pointAtDepth(const ChordMedium& medium, std::uint32_t level, const Segments& segments, double scale,
+                  double target) {
     double depth = 0;
-    std::optional<Vec3> found;
     for (const auto& segment : segments) {
         // Not a structured binding: Clang 14 (the fuzz build) cannot capture one in a lambda.
         const Vec3& a = segment.first;
         const Vec3 w = (segment.second - a).normalized();
-        DensityProfile::Line line(profile, int(level), a, w);
-        forEachVoxelOnSegment(tree, level, a, segment.second, [&](const OctreeNode& node, double t0, double t1) {
-            if (found) return;
-            const double sigma = scale * detail::voxelExtinction(node, w) * line.mean(t0, t1);
+        DensityProfile::Line line(medium.profile(), int(level), a, w);
+        std::optional<Vec3> found;
+        medium.forEachVoxel(level, a, segment.second, [&](double extinction, double t0, double t1) {
+            const double sigma = scale * extinction * line.mean(t0, t1);
             if (sigma > 0 && depth + sigma * (t1 - t0) >= target) found = a + (t0 + (target - depth) / sigma) * w;
             else depth += sigma * (t1 - t0);
+            return !found;
         });
         if (found) return *found;
     }
@@ -55,9 +54,10 @@ struct ChordLight {
 
 }  // namespace
 
-LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, const ChordVisibility& visible,
+LitFractions measureLitFractions(const ChordMedium& medium, const ChordFirstHit& hit, const ChordVisibility& visible,
                                  double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
                                  int chords, std::uint64_t seed, const LitPairs& wanted) {
+    const Octree& tree = medium.tree();
     const std::size_t levels = std::min(scales.size(), tree.levels.size());
     // Camera level c needs shadow levels c − 1 and finer: none past finestShadowLevel.
     const std::size_t shadowEnd = std::min(finestShadowLevel + 1, levels), cameraEnd = shadowEnd;
@@ -70,7 +70,6 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
     const auto firstShadow = [](std::size_t c) { return c == 0 ? std::size_t(0) : c - 1; };
     const auto measured = [&](std::size_t c, std::size_t l) { return !wanted || wanted(c, l); };
     std::vector<ChordLight> traced(static_cast<std::size_t>(chords));
-    const DensityProfile profile(tree);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, traced.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t j = r.begin(); j != r.end(); ++j) {
             ChordRng rng{mix64(seed ^ mix64(0x117ull + std::uint64_t(j)))};
@@ -89,13 +88,13 @@ LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, c
             t.shadow.assign(cameraEnd * levels, 0.0);
             for (std::size_t c = 0; c < cameraEnd; ++c) {
                 const double scale = tau * scales[c];
-                const double alpha = 1 - std::exp(-scale * chordDepth(tree, profile, std::uint32_t(c), chord));
+                const double alpha = 1 - std::exp(-scale * detail::chordDepth(medium, std::uint32_t(c), chord));
                 t.opacity[c] = alpha;
                 if (!(alpha > 0)) continue;
                 // Inverse-CDF sampling of the weight T·σ: the depth d at which 1 − e^−d = u·α.
-                const Segments ray = toTheTop(pointAtDepth(tree, profile, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha)), light);
+                const Segments ray = toTheTop(pointAtDepth(medium, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha)), light);
                 for (std::size_t l = firstShadow(c); l < shadowEnd; ++l)
-                    if (measured(c, l)) t.shadow[c * levels + l] = std::exp(-tau * scales[l] * chordDepth(tree, profile, std::uint32_t(l), ray));
+                    if (measured(c, l)) t.shadow[c * levels + l] = std::exp(-tau * scales[l] * detail::chordDepth(medium, std::uint32_t(l), ray));
             }
         }
     });

@@ -18,11 +18,11 @@ namespace {
 // The faithful levels (render::faithfulLevels), measured from the coarsest level finer and
 // stopping at the first level past the run, so that a render does not read a lazily opened
 // texel's finest levels (the bulk of its file) only to measure them.
-FaithfulLevels measureFaithfulLevels(const octree::Octree& tree, const octree::ChordVisibility& visible, double tau,
+FaithfulLevels measureFaithfulLevels(const octree::ChordMedium& medium, const octree::ChordVisibility& visible, double tau,
                                      double tolerance) {
     int coarsest = -1;
     const auto chords = octree::measureChordTransmittance(
-        tree, visible, tau, kLoadChords, 1, [&](std::size_t level, const octree::ChordTransmittance& c) {
+        medium, visible, tau, kLoadChords, 1, [&](std::size_t level, const octree::ChordTransmittance& c) {
             const bool within = std::abs(c.error()) <= tolerance;
             if (within && coarsest < 0) coarsest = int(level);
             return coarsest >= 0 && !within;
@@ -95,7 +95,7 @@ int meshLevelFrom(const octree::LitFractions& lit, const std::vector<int>& shado
     return faithful.finest;
 }
 
-MeasuredLighting measureLighting(const octree::Octree& tree, const SourceBvh& source, const octree::ChordVisibility& visible,
+MeasuredLighting measureLighting(const octree::ChordMedium& medium, const SourceBvh& source, const octree::ChordVisibility& visible,
                                  double tau, const std::vector<double>& scales, const FaithfulLevels& faithful) {
     const octree::ChordFirstHit hit = [&](const Vec3& a, const Vec3& b) -> std::optional<double> {
         if (const auto h = source.intersect(a, b, 0)) return h->s;
@@ -107,7 +107,7 @@ MeasuredLighting measureLighting(const octree::Octree& tree, const SourceBvh& so
     const std::size_t finest = std::max(std::size_t(std::max(faithful.finest, 0)), coarsest);
     const octree::LitPairs wanted = [&](std::size_t c, std::size_t l) { return l <= coarsest || l + 1 == c; };
     const octree::LitFractions lit =
-        octree::measureLitFractions(tree, hit, visible, tau, scales, finest, kLoadChords, 1, wanted);
+        octree::measureLitFractions(medium, hit, visible, tau, scales, finest, kLoadChords, 1, wanted);
     const double margin = 2 * lit.meshStandardError();
     MeasuredLighting out{shadowLevelsFrom(lit, faithful.coarsest, margin, NearShadowTable::kMaxLevel), faithful.finest};
     out.meshLevel = meshLevelFrom(lit, out.shadowLevels, faithful, margin);
@@ -134,7 +134,9 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             t.sourceMesh = loadTexelSource(scene, index);
             auto source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
             const octree::ChordVisibility visible = [&](const Vec3& a, const Vec3& b) { return !source->occluded(a, b, 0); };
-            const FaithfulLevels faithful = measureFaithfulLevels(*tree, visible, def.tau, options.hybridTolerance);
+            // One medium for the three measures: they share its dense levels (chord_medium.h).
+            const octree::ChordMedium medium(*tree);
+            const FaithfulLevels faithful = measureFaithfulLevels(medium, visible, def.tau, options.hybridTolerance);
             t.coarsestShadowLevel = faithful.coarsest;
             // Measured before the fit, the faithful levels keep saying where the volume's
             // chords differ from the mesh's per chord, which a scale per level does not change.
@@ -144,9 +146,9 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest + 1) : 30u;
             int meshLevel = faithful.finest;
             if (options.fitLevels) {
-                for (const octree::ShellChordFit& fit : octree::fitShellChords(*tree, visible, def.tau, kLevelFitChords, 1, finest))
+                for (const octree::ShellChordFit& fit : octree::fitShellChords(medium, visible, def.tau, kLevelFitChords, 1, finest))
                     t.levelScale.push_back(fit.scale);
-                MeasuredLighting lighting = measureLighting(*tree, *source, visible, def.tau, t.levelScale, faithful);
+                MeasuredLighting lighting = measureLighting(medium, *source, visible, def.tau, t.levelScale, faithful);
                 t.shadowLevels = std::move(lighting.shadowLevels);
                 meshLevel = lighting.meshLevel;
             }

@@ -12,6 +12,7 @@
 /// chords that miss the mesh against the model transmittance along the same chords.
 #pragma once
 
+#include <vtex/octree/chord_medium.h>
 #include <vtex/octree/octree.h>
 
 #include <cmath>
@@ -40,12 +41,12 @@ struct ChordTransmittance {
 /// Every level of `tree`, `chords` chords each (the same chords for every level; a pure
 /// function of `seed`, whatever the thread count). The mean of `chords` binary visibilities has
 /// a standard error of at most 0.5/√chords (0.008 at the default).
-std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+std::vector<ChordTransmittance> measureChordTransmittance(const ChordMedium& medium, const ChordVisibility& visible,
                                                           double tau = 1, int chords = 4096, std::uint64_t seed = 1);
 
 /// The same chords, level l's densities scaled by tauPerLevel[l] instead of one τ (a fitted
 /// level's, fitShellChords's scale times τ): levels 0 … min(tauPerLevel.size(), levels) − 1.
-std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+std::vector<ChordTransmittance> measureChordTransmittance(const ChordMedium& medium, const ChordVisibility& visible,
                                                           const std::vector<double>& tauPerLevel, int chords = 4096,
                                                           std::uint64_t seed = 1);
 
@@ -56,7 +57,7 @@ using EnoughLevels = std::function<bool(std::size_t level, const ChordTransmitta
 /// The same levels and chords, from the coarsest down to the first level after which `enough`
 /// says stop (the result holds the levels measured): finer levels are neither walked nor read
 /// from a lazily opened file, whose finest levels hold nearly all its bytes.
-std::vector<ChordTransmittance> measureChordTransmittance(const Octree& tree, const ChordVisibility& visible,
+std::vector<ChordTransmittance> measureChordTransmittance(const ChordMedium& medium, const ChordVisibility& visible,
                                                           double tau, int chords, std::uint64_t seed,
                                                           const EnoughLevels& enough);
 
@@ -77,7 +78,7 @@ struct BeamError {
 
 /// Every level of `tree`, `beams` beams of `chordsPerBeam` chords each (rounded down to a
 /// square); a pure function of `seed`, whatever the thread count.
-std::vector<BeamError> measureBeamTransmittance(const Octree& tree, const ChordVisibility& visible, double tau = 1,
+std::vector<BeamError> measureBeamTransmittance(const ChordMedium& medium, const ChordVisibility& visible, double tau = 1,
                                                 int beams = 256, int chordsPerBeam = 256, std::uint64_t seed = 1);
 
 /// One level fitted over chords that cross the texel's shell as camera rays and shadow rays do:
@@ -98,12 +99,12 @@ struct ShellChordFit {
 /// Levels 0 … min(finestLevel, deepest) of `tree`, over `chords` shell chords (the same for every
 /// level; a pure function of `seed`, whatever the thread count). The visibility's standard error
 /// is ≤ 0.5/√chords.
-std::vector<ShellChordFit> fitShellChords(const Octree& tree, const ChordVisibility& visible, double tau = 1,
+std::vector<ShellChordFit> fitShellChords(const ChordMedium& medium, const ChordVisibility& visible, double tau = 1,
                                           int chords = 4096, std::uint64_t seed = 1, std::uint32_t finestLevel = 30);
 /// The mean transmittance of `level` with its densities times `scale`, over `chords` shell chords
 /// drawn from `seed` (what fitShellChords equates to the visibility; for checking a fit on
 /// chords it was not fitted on).
-ShellChordFit measureShellChords(const Octree& tree, const ChordVisibility& visible, std::uint32_t level,
+ShellChordFit measureShellChords(const ChordMedium& medium, const ChordVisibility& visible, std::uint32_t level,
                                  double scale, double tau = 1, int chords = 4096, std::uint64_t seed = 1);
 
 /// Where the segment a → b (inside the unit cube) first meets a source surface, as a fraction of
@@ -134,7 +135,7 @@ struct LitFractions {
     double meshStandardError() const { return seen > 0 ? std::sqrt(mesh * (1 - mesh) / double(seen)) : 0; }
 };
 using LitPairs = std::function<bool(std::size_t camera, std::size_t shadow)>;
-LitFractions measureLitFractions(const Octree& tree, const ChordFirstHit& hit, const ChordVisibility& visible,
+LitFractions measureLitFractions(const ChordMedium& medium, const ChordFirstHit& hit, const ChordVisibility& visible,
                                  double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
                                  int chords, std::uint64_t seed = 1, const LitPairs& wanted = {});
 

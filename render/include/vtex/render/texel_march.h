@@ -72,25 +72,14 @@ struct LevelGrid {
     std::vector<std::uint32_t> cells;
     std::vector<GridVoxel> voxels;
 
-    /// octree::mortonEncode(x, y, z) for x, y, z < 256, from a table: the walk computes one per
-    /// step, and the table's three loads cost less than a call that spreads the bits.
-    static std::uint32_t morton(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-        return kSpread[x & 255u] | (kSpread[y & 255u] << 1) | (kSpread[z & 255u] << 2);
-    }
+    /// octree::mortonEncode(x, y, z) for x, y, z < 256 (octree::mortonEncode8).
+    static std::uint32_t morton(std::uint32_t x, std::uint32_t y, std::uint32_t z) { return octree::mortonEncode8(x, y, z); }
     std::uint32_t cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) const { return cells[morton(x, y, z)]; }
     /// The empty-space distance at a voxel (0 when it is not empty).
     int distance(std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
         const std::uint32_t c = cell(x, y, z);
         return c & kEmpty ? int(c & 0xFFu) : 0;
     }
-
-private:
-    /// mortonEncode(i, 0, 0): a key's x bits; its y and z bits are the same shifted by 1 and 2.
-    static inline const std::array<std::uint32_t, 256> kSpread = [] {
-        std::array<std::uint32_t, 256> t{};
-        for (std::uint32_t i = 0; i < 256; ++i) t[i] = std::uint32_t(octree::mortonEncode(i, 0, 0));
-        return t;
-    }();
 };
 
 /// A texel's octree prepared for marching. Levels up to `maxGridLevel` are marched as dense
