@@ -1,16 +1,14 @@
 // See chord_medium.h.
 #include <vtex/octree/chord_medium.h>
 
-#include <vtex/octree/cursor.h>
-
 namespace vtex::octree {
 namespace {
 
 // Fills the voxels of `level` below `node` (at `nodeLevel`, voxel x, y, z there) into `dense`:
 // the voxels a leaf above the level stands for take its entry, as OctreeCursor::locate answers.
-template <class Dense>
-void fill(const Octree& tree, const OctreeNode& node, std::uint32_t nodeLevel, std::int64_t x, std::int64_t y,
-          std::int64_t z, std::uint32_t level, Dense& dense) {
+template <class Grid>
+void fill(const Octree& tree, const OctreeNode& node, std::uint32_t nodeLevel, std::int64_t x,
+          std::int64_t y, std::int64_t z, std::uint32_t level, Grid& dense) {
     if (nodeLevel == level || node.isLeaf()) {
         if (node.data.isEmpty()) return;
         dense.voxels.push_back({unpackS(node.data), double(node.data.density)});
@@ -19,14 +17,16 @@ void fill(const Octree& tree, const OctreeNode& node, std::uint32_t nodeLevel, s
         for (std::int64_t k = z * size; k < (z + 1) * size; ++k)
             for (std::int64_t j = y * size; j < (y + 1) * size; ++j)
                 for (std::int64_t i = x * size; i < (x + 1) * size; ++i)
-                    dense.cells[mortonEncode8(std::uint32_t(i), std::uint32_t(j), std::uint32_t(k))] = entry;
+                    dense.cells[mortonEncode8(std::uint32_t(i), std::uint32_t(j),
+                                              std::uint32_t(k))] = entry;
         return;
     }
     const auto& children = tree.levels[nodeLevel + 1];
     for (unsigned c = 0; c < 8; ++c)
         if (node.childMask & (1u << c))
-            fill(tree, children[node.firstChild + detail::kBitsBelow[node.childMask][c]], nodeLevel + 1, 2 * x + (c & 1),
-                 2 * y + (c >> 1 & 1), 2 * z + (c >> 2 & 1), level, dense);
+            fill(tree, children[node.firstChild + detail::kBitsBelow[node.childMask][c]],
+                 nodeLevel + 1, 2 * x + (c & 1), 2 * y + (c >> 1 & 1), 2 * z + (c >> 2 & 1), level,
+                 dense);
 }
 
 }  // namespace

@@ -2,17 +2,16 @@
 // walk as the octree's own descent does (forEachVoxelOnSegment), the same voxels with the same
 // extinction and the same distances to the last bit, on a tree with leaves above the finest level
 // and empty blocks at every level, and past the deepest dense level, where it walks the octree.
-#include "random_volume.h"
-
+#include <gtest/gtest.h>
 #include <vtex/octree/chord_medium.h>
 #include <vtex/octree/chord_transmittance.h>
 #include <vtex/octree/voxel.h>
 
-#include <gtest/gtest.h>
-
 #include <random>
 #include <tuple>
 #include <vector>
+
+#include "random_volume.h"
 
 namespace vtex::octree {
 namespace {
@@ -73,7 +72,8 @@ void expectSameWalks(const Octree& tree, std::uint32_t firstLevel, int segments)
             if (k % 5 == 0) a = (a * 64).array().floor() / 64;
             if (k % 7 == 0) b.x() = a.x();
             const Visits want = octreeVisits(tree, level, a, b);
-            EXPECT_EQ(mediumVisits(medium, level, a, b), want) << "level " << level << ", segment " << k;
+            EXPECT_EQ(mediumVisits(medium, level, a, b), want)
+                << "level " << level << ", segment " << k;
             visits += want.size();
             // The depth is those visits summed with the profile's factor (1 at unprofiled levels).
             double depth = 0;
@@ -89,7 +89,8 @@ TEST(ChordMedium, DenseLevelsWalkAsTheOctreeDoes) {
     // The slab is stored above level 6 (leaves standing for blocks of voxels).
     bool leafAbove = false;
     for (std::size_t l = 0; l + 1 < tree.levels.size(); ++l)
-        for (const auto& node : tree.levels[l]) leafAbove = leafAbove || (node.isLeaf() && !node.data.isEmpty());
+        for (const auto& node : tree.levels[l])
+            leafAbove = leafAbove || (node.isLeaf() && !node.data.isEmpty());
     ASSERT_TRUE(leafAbove);
     expectSameWalks(tree, 0, 200);
 }
@@ -106,7 +107,8 @@ TEST(MortonEncode8, IsMortonEncodeBelow256) {
     for (std::uint32_t z = 0; z < 256; ++z)
         for (std::uint32_t y = 0; y < 256; ++y)
             for (std::uint32_t x = 0; x < 256; x += 1 + (y + z) % 3)
-                ASSERT_EQ(std::uint64_t(mortonEncode8(x, y, z)), mortonEncode(x, y, z)) << x << " " << y << " " << z;
+                ASSERT_EQ(std::uint64_t(mortonEncode8(x, y, z)), mortonEncode(x, y, z))
+                    << x << " " << y << " " << z;
 }
 
 }  // namespace

@@ -4,17 +4,16 @@
 // took both of this machine's). A TBB observer of the caller's arena sees every worker that
 // joins it: none may while a render runs, which then runs in an arena of its own of `threads`
 // (stats.threads).
-#include "bush_field.h"
-
-#include <vtex/render/reference.h>
-
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_scheduler_observer.h>
+#include <vtex/render/reference.h>
 
 #include <atomic>
 #include <cmath>
 #include <thread>
+
+#include "bush_field.h"
 
 namespace {
 
@@ -36,7 +35,8 @@ private:
 };
 
 TEST(Threads, ARenderAskedForOneThreadRunsItsLoadAndTilesOnOne) {
-    if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: no worker could join anyway";
+    if (std::thread::hardware_concurrency() < 2)
+        GTEST_SKIP() << "one core: no worker could join anyway";
     const Scene scene = bushField(Eigen::Vector3d(0.5, -3, 3), 24);
     RenderOptions options;
     options.threads = 1;
@@ -61,7 +61,8 @@ TEST(Threads, ARenderAskedForOneThreadRunsItsLoadAndTilesOnOne) {
 }
 
 TEST(Threads, AReferenceAskedForOneThreadRunsOnOne) {
-    if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: no worker could join anyway";
+    if (std::thread::hardware_concurrency() < 2)
+        GTEST_SKIP() << "one core: no worker could join anyway";
     const Scene scene = bushField(Eigen::Vector3d(0.5, -3, 3), 24);
     ReferenceOptions options;
     options.threads = 1;

@@ -57,16 +57,18 @@ public:
     double depth(std::uint32_t level, const Vec3& a, const Vec3& b) const;
 
 private:
-    /// One level as a dense array in Morton order (the voxels a chord crosses are near each
-    /// other in memory): cells[mortonEncode(x, y, z)] is the index + 1 of the voxel's stored node
-    /// (itself or a leaf above) in `voxels`, 0 for empty space.
+    /// A stored node's ρ and S as voxelExtinction takes them (unpackS: the same values as
+    /// unpacking the node at every visit), kept so that a visit unpacks nothing.
     struct Voxel {
-        primitive::SggxMatrix s;  ///< unpackS of the node: the same values as unpacking it at every visit
+        primitive::SggxMatrix s;
         double density;
     };
+    /// One level as a dense array in Morton order (the voxels a chord crosses are near each
+    /// other in memory): cells[mortonEncode8(x, y, z)] is the index + 1 of the voxel's stored
+    /// node (itself or a leaf above) in `voxels`, 0 for empty space.
     struct Dense {
         std::vector<std::uint32_t> cells;
-        std::vector<Voxel> voxels;  ///< voxelExtinction's ρ and S, kept: a visit reads them, unpacks nothing
+        std::vector<Voxel> voxels;
     };
     const Dense* dense(std::uint32_t level) const;
 
@@ -93,16 +95,22 @@ void walkVoxels(std::uint32_t level, const Vec3& a, const Vec3& b, Lookup&& look
         cell[std::size_t(k)] = std::int64_t(p);
         step[std::size_t(k)] = w[k] > 0 ? 1 : -1;
         const bool moves = std::abs(w[k]) > 1e-300;
-        inc[std::size_t(k)] = moves ? 1 / (std::abs(w[k]) * n) : std::numeric_limits<double>::infinity();
-        const double boundary = w[k] > 0 ? double(cell[std::size_t(k)] + 1) : double(cell[std::size_t(k)]);
-        next[std::size_t(k)] = moves ? (boundary / n - a[k]) / w[k] : std::numeric_limits<double>::infinity();
+        inc[std::size_t(k)] =
+            moves ? 1 / (std::abs(w[k]) * n) : std::numeric_limits<double>::infinity();
+        const double boundary =
+            w[k] > 0 ? double(cell[std::size_t(k)] + 1) : double(cell[std::size_t(k)]);
+        next[std::size_t(k)] =
+            moves ? (boundary / n - a[k]) / w[k] : std::numeric_limits<double>::infinity();
     }
     const std::int64_t last = std::int64_t(n) - 1;
     double t = 0;
     while (t < length) {
-        const std::size_t k = next[0] <= next[1] && next[0] <= next[2] ? 0 : next[1] <= next[2] ? 1 : 2;
+        const std::size_t k = next[0] <= next[1] && next[0] <= next[2] ? 0
+                              : next[1] <= next[2]                     ? 1
+                                                                       : 2;
         const double t1 = std::min(next[k], length);
-        if (const auto* node = lookup(cell[0], cell[1], cell[2]); node && !visit(*node, t, t1)) return;
+        if (const auto* node = lookup(cell[0], cell[1], cell[2]); node && !visit(*node, t, t1))
+            return;
         t = t1;
         cell[k] += step[k];
         next[k] += inc[k];
@@ -113,27 +121,34 @@ void walkVoxels(std::uint32_t level, const Vec3& a, const Vec3& b, Lookup&& look
 }  // namespace detail
 
 template <class Visit>
-void ChordMedium::forEachVoxel(std::uint32_t level, const Vec3& a, const Vec3& b, Visit&& visit) const {
+void ChordMedium::forEachVoxel(std::uint32_t level, const Vec3& a, const Vec3& b,
+                               Visit&& visit) const {
     mTree.loadLevels(level);  // a tree opened with openVto reads the level now if need be
     if (mTree.levels.empty() || mTree.levels[0].empty() || level >= mTree.levels.size()) return;
     const Vec3 w = (b - a).normalized();
     if (const Dense* grid = dense(level)) {
-        detail::walkVoxels(level, a, b,
-                   [&](std::int64_t x, std::int64_t y, std::int64_t z) -> const Voxel* {
-                       const std::uint32_t c = grid->cells[mortonEncode8(std::uint32_t(x), std::uint32_t(y), std::uint32_t(z))];
-                       return c ? &grid->voxels[c - 1] : nullptr;
-                   },
-                   [&](const Voxel& voxel, double t0, double t1) { return visit(voxel.density * voxel.s.projectedArea(w), t0, t1); });
+        detail::walkVoxels(
+            level, a, b,
+            [&](std::int64_t x, std::int64_t y, std::int64_t z) -> const Voxel* {
+                const std::uint32_t c = grid->cells[mortonEncode8(
+                    std::uint32_t(x), std::uint32_t(y), std::uint32_t(z))];
+                return c ? &grid->voxels[c - 1] : nullptr;
+            },
+            [&](const Voxel& voxel, double t0, double t1) {
+                return visit(voxel.density * voxel.s.projectedArea(w), t0, t1);
+            });
         return;
     }
     OctreeCursor cursor(mTree);
-    detail::walkVoxels(level, a, b,
-               [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-                   return cursor.locate(int(level), std::uint32_t(x), std::uint32_t(y), std::uint32_t(z)).node;
-               },
-               [&](const OctreeNode& node, double t0, double t1) {
-                   return visit(voxelExtinction(node, w), t0, t1);
-               });
+    detail::walkVoxels(
+        level, a, b,
+        [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+            return cursor.locate(int(level), std::uint32_t(x), std::uint32_t(y), std::uint32_t(z))
+                .node;
+        },
+        [&](const OctreeNode& node, double t0, double t1) {
+            return visit(voxelExtinction(node, w), t0, t1);
+        });
 }
 
 }  // namespace vtex::octree
