@@ -6,6 +6,7 @@
 // (stats.threads).
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <tbb/task_scheduler_observer.h>
 #include <vtex/render/reference.h>
 
@@ -20,10 +21,12 @@ namespace {
 using namespace vtex::render;
 using namespace vtex::render::test;
 
-// Counts the workers that join the arena of the thread that makes it (oneTBB's observer).
+// Counts the workers that join `arena` while it lives. The arena is the test's own, which the
+// calling thread enters and leaves (task_arena::execute): an observer of the thread's implicit
+// arena keeps a reference TBB frees only at the thread's exit, which LeakSanitizer reports.
 class WorkerCount : public tbb::task_scheduler_observer {
 public:
-    WorkerCount() { observe(true); }
+    explicit WorkerCount(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) { observe(true); }
     ~WorkerCount() override { observe(false); }
     void on_scheduler_entry(bool isWorker) override {
         if (isWorker) ++mWorkers;
@@ -34,22 +37,8 @@ private:
     std::atomic<int> mWorkers{0};
 };
 
-TEST(Threads, ARenderAskedForOneThreadRunsItsLoadAndTilesOnOne) {
-    if (std::thread::hardware_concurrency() < 2)
-        GTEST_SKIP() << "one core: no worker could join anyway";
-    const Scene scene = bushField(Eigen::Vector3d(0.5, -3, 3), 24);
-    RenderOptions options;
-    options.threads = 1;
-    {
-        WorkerCount count;
-        const RenderResult result = renderQuiet(scene, options);
-        EXPECT_EQ(result.stats.threads, 1);
-        EXPECT_GT(result.stats.voxelsVisited, 0u);
-        EXPECT_EQ(count.workers(), 0);
-    }
-    // The observer does see workers that join this arena (the test would catch nothing
-    // otherwise): a parallel loop as long as the render's measures.
-    WorkerCount count;
+// A parallel loop as long as a render's load: workers join the arena it runs in.
+void busyLoop() {
     std::atomic<int> finite{0};
     tbb::parallel_for(0, 1 << 12, [&](int i) {
         double x = i;
@@ -57,19 +46,41 @@ TEST(Threads, ARenderAskedForOneThreadRunsItsLoadAndTilesOnOne) {
         if (std::isfinite(x)) ++finite;
     });
     EXPECT_EQ(finite.load(), 1 << 12);
+}
+
+TEST(Threads, ARenderAskedForOneThreadRunsItsLoadAndTilesOnOne) {
+    if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: no worker could join anyway";
+    const Scene scene = bushField(Eigen::Vector3d(0.5, -3, 3), 24);
+    RenderOptions options;
+    options.threads = 1;
+    tbb::task_arena caller(2);  // the arena a caller renders from, with room for a worker
+    {
+        WorkerCount count(caller);
+        caller.execute([&] {
+            const RenderResult result = renderQuiet(scene, options);
+            EXPECT_EQ(result.stats.threads, 1);
+            EXPECT_GT(result.stats.voxelsVisited, 0u);
+        });
+        EXPECT_EQ(count.workers(), 0);
+    }
+    // The observer does see workers that join the caller's arena (the test would catch nothing
+    // otherwise).
+    WorkerCount count(caller);
+    caller.execute(busyLoop);
     EXPECT_GT(count.workers(), 0);
 }
 
 TEST(Threads, AReferenceAskedForOneThreadRunsOnOne) {
-    if (std::thread::hardware_concurrency() < 2)
-        GTEST_SKIP() << "one core: no worker could join anyway";
+    if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one core: no worker could join anyway";
     const Scene scene = bushField(Eigen::Vector3d(0.5, -3, 3), 24);
     ReferenceOptions options;
     options.threads = 1;
-    vtex::NullProgress progress;
-    WorkerCount count;
-    const RenderResult result = renderReference(scene, options, progress);
-    EXPECT_EQ(result.stats.threads, 1);
+    tbb::task_arena caller(2);
+    WorkerCount count(caller);
+    caller.execute([&] {
+        vtex::NullProgress progress;
+        EXPECT_EQ(renderReference(scene, options, progress).stats.threads, 1);
+    });
     EXPECT_EQ(count.workers(), 0);
 }
 
