@@ -34,15 +34,14 @@ void fill(const Octree& tree, const OctreeNode& node, std::uint32_t nodeLevel, s
 ChordMedium::ChordMedium(const Octree& tree) : mTree(tree), mProfile(tree) {}
 ChordMedium::~ChordMedium() = default;
 
-const ChordMedium::Dense* ChordMedium::dense(std::uint32_t level) const {
-    if (level > kMaxDenseLevel) return nullptr;
+const ChordMedium::Dense& ChordMedium::dense(std::uint32_t level) const {
     std::call_once(mBuilt[level], [&] {
         auto grid = std::make_unique<Dense>();
         grid->cells.assign(std::size_t(1) << (3 * level), 0);
         fill(mTree, mTree.levels[0][0], 0, 0, 0, 0, level, *grid);
         mDense[level] = std::move(grid);
     });
-    return mDense[level].get();
+    return *mDense[level];
 }
 
 double ChordMedium::depth(std::uint32_t level, const Vec3& a, const Vec3& b) const {

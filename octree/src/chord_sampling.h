@@ -7,8 +7,6 @@
 
 #include <vtex/octree/chord_medium.h>
 #include <vtex/octree/octree.h>
-#include <vtex/octree/density_profile.h>
-#include <vtex/octree/voxel.h>
 
 #include "hash.h"
 

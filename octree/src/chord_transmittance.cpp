@@ -1,7 +1,6 @@
 // See chord_transmittance.h.
 #include <vtex/octree/chord_transmittance.h>
 
-#include <vtex/octree/cursor.h>
 #include <vtex/octree/voxel.h>
 
 #include "chord_sampling.h"
@@ -33,18 +32,10 @@ using detail::randomShellChord;
 
 void forEachVoxelOnSegment(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b,
                            const std::function<void(const OctreeNode&, double, double)>& visit) {
-    tree.loadLevels(level);  // a tree opened with openVto reads the level now if need be
-    if (tree.levels.empty() || tree.levels[0].empty() || level >= tree.levels.size()) return;
-    OctreeCursor cursor(tree);
-    detail::walkVoxels(
-        level, a, b,
-        [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-            return cursor.locate(int(level), std::uint32_t(x), std::uint32_t(y), std::uint32_t(z)).node;
-        },
-        [&](const OctreeNode& node, double t0, double t1) {
-            visit(node, t0, t1);
-            return true;
-        });
+    detail::walkOctree(tree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
+        visit(node, t0, t1);
+        return true;
+    });
 }
 
 namespace {

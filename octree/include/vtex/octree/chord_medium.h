@@ -70,7 +70,8 @@ private:
         std::vector<std::uint32_t> cells;
         std::vector<Voxel> voxels;
     };
-    const Dense* dense(std::uint32_t level) const;
+    /// Level `level` (≤ kMaxDenseLevel, which the tree has) as a dense array, built on first use.
+    const Dense& dense(std::uint32_t level) const;
 
     const Octree& mTree;
     DensityProfile mProfile;
@@ -118,36 +119,50 @@ void walkVoxels(std::uint32_t level, const Vec3& a, const Vec3& b, Lookup&& look
     }
 }
 
+/// Whether `tree` has `level`, which a tree opened with openVto reads now if need be.
+inline bool readLevel(const Octree& tree, std::uint32_t level) {
+    tree.loadLevels(level);
+    return !tree.levels.empty() && !tree.levels[0].empty() && level < tree.levels.size();
+}
+
+/// walkVoxels through the octree itself, each voxel's node located by an OctreeCursor
+/// (forEachVoxelOnSegment's walk, and ChordMedium's past its dense levels); nothing for a
+/// level the tree does not have.
+template <class Visit>
+void walkOctree(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b, Visit&& visit) {
+    if (!readLevel(tree, level)) return;
+    OctreeCursor cursor(tree);
+    walkVoxels(
+        level, a, b,
+        [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+            return cursor.locate(int(level), std::uint32_t(x), std::uint32_t(y), std::uint32_t(z)).node;
+        },
+        visit);
+}
+
 }  // namespace detail
 
 template <class Visit>
 void ChordMedium::forEachVoxel(std::uint32_t level, const Vec3& a, const Vec3& b,
                                Visit&& visit) const {
-    mTree.loadLevels(level);  // a tree opened with openVto reads the level now if need be
-    if (mTree.levels.empty() || mTree.levels[0].empty() || level >= mTree.levels.size()) return;
     const Vec3 w = (b - a).normalized();
-    if (const Dense* grid = dense(level)) {
-        detail::walkVoxels(
-            level, a, b,
-            [&](std::int64_t x, std::int64_t y, std::int64_t z) -> const Voxel* {
-                const std::uint32_t c = grid->cells[mortonEncode8(
-                    std::uint32_t(x), std::uint32_t(y), std::uint32_t(z))];
-                return c ? &grid->voxels[c - 1] : nullptr;
-            },
-            [&](const Voxel& voxel, double t0, double t1) {
-                return visit(voxel.density * voxel.s.projectedArea(w), t0, t1);
-            });
+    if (level > kMaxDenseLevel) {
+        detail::walkOctree(mTree, level, a, b, [&](const OctreeNode& node, double t0, double t1) {
+            return visit(voxelExtinction(node, w), t0, t1);
+        });
         return;
     }
-    OctreeCursor cursor(mTree);
+    if (!detail::readLevel(mTree, level)) return;
+    const Dense& grid = dense(level);
     detail::walkVoxels(
         level, a, b,
-        [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-            return cursor.locate(int(level), std::uint32_t(x), std::uint32_t(y), std::uint32_t(z))
-                .node;
+        [&](std::int64_t x, std::int64_t y, std::int64_t z) -> const Voxel* {
+            const std::uint32_t c =
+                grid.cells[mortonEncode8(std::uint32_t(x), std::uint32_t(y), std::uint32_t(z))];
+            return c ? &grid.voxels[c - 1] : nullptr;
         },
-        [&](const OctreeNode& node, double t0, double t1) {
-            return visit(voxelExtinction(node, w), t0, t1);
+        [&](const Voxel& voxel, double t0, double t1) {
+            return visit(voxel.density * voxel.s.projectedArea(w), t0, t1);
         });
 }
 
