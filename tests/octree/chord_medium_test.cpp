@@ -18,28 +18,12 @@ namespace {
 
 using Visits = std::vector<std::tuple<double, double, double>>;  // (ρÂ, t0, t1)
 
-// Scattered voxels and a solid slab, which the compression stores as leaves above the finest level.
+// Scattered random voxels over a solid slab, which the compression stores as leaves above the
+// finest level.
 Octree slabTree(std::uint32_t levels) {
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> u(0, 1);
-    SparseVolume v;
-    v.info.levels = levels;
     const std::uint32_t n = 1u << levels;
-    for (std::uint32_t z = 0; z < n; ++z)
-        for (std::uint32_t y = 0; y < n; ++y)
-            for (std::uint32_t x = 0; x < n; ++x) {
-                const bool slab = z >= n / 4 && z < n / 2;
-                if (!slab && u(rng) > 0.03f) continue;
-                VoxelData d = slab ? VoxelData{} : test::randomVoxel(rng);
-                if (slab) {
-                    d.density = 3.0f;
-                    packIsotropic(d);
-                }
-                v.blocks.push_back(VolumeBlock{mortonEncode(x, y, z), std::uint8_t(levels), 0, d});
-            }
-    v.sortBlocks();
-    NullProgress progress;
-    return buildOctree(v, BuildOptions{}, progress);
+    return test::scatteredOverSlab(levels, n / 4, n / 2, 0.03f, 5,
+                                   [](std::uint32_t, std::uint32_t, std::uint32_t, std::mt19937& rng) { return test::randomVoxel(rng); });
 }
 
 Visits octreeVisits(const Octree& tree, std::uint32_t level, const Vec3& a, const Vec3& b) {

@@ -12,33 +12,23 @@
 #include <random>
 #include <vector>
 
+#include "random_volume.h"
+
 namespace vtex::octree {
 namespace {
 
 constexpr std::uint32_t kLevels = 5;
 
-// Scattered voxels of a few distinct values, and a solid slab whose constant blocks the
+// Scattered voxels of a few distinct values over a solid slab, whose constant blocks the
 // compression stores as leaves above the finest level.
 Octree testTree() {
-    std::mt19937 rng(3);
-    std::uniform_real_distribution<float> u(0, 1);
-    SparseVolume v;
-    v.info.levels = kLevels;
-    const std::uint32_t n = 1u << kLevels;
-    for (std::uint32_t z = 0; z < n; ++z)
-        for (std::uint32_t y = 0; y < n; ++y)
-            for (std::uint32_t x = 0; x < n; ++x) {
-                const bool slab = z >= 8 && z < 16;
-                if (!slab && u(rng) > 0.05f) continue;
-                VoxelData d;
-                d.density = slab ? 3.0f : 1.0f + float((x + 2 * y + 3 * z) % 3);
-                packIsotropic(d);
-                d.albedo = {0.5f, 0.5f, 0.5f};
-                v.blocks.push_back(VolumeBlock{mortonEncode(x, y, z), std::uint8_t(kLevels), 0, d});
-            }
-    v.sortBlocks();
-    NullProgress progress;
-    return buildOctree(v, BuildOptions{}, progress);
+    return test::scatteredOverSlab(kLevels, 8, 16, 0.05f, 3, [](std::uint32_t x, std::uint32_t y, std::uint32_t z, std::mt19937&) {
+        VoxelData d;
+        d.density = 1.0f + float((x + 2 * y + 3 * z) % 3);
+        packIsotropic(d);
+        d.albedo = {0.5f, 0.5f, 0.5f};
+        return d;
+    });
 }
 
 struct Voxel {

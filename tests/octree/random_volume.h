@@ -1,9 +1,11 @@
 /// @file
 /// @brief Random sparse volumes for the octree tests: random voxels (density, ellipsoid,
-/// albedo) at random distinct positions of the finest level.
+/// albedo) at random distinct positions of the finest level, and scattered voxels over a slab.
 #pragma once
 
+#include <vtex/core/progress.h>
 #include <vtex/octree/octree.h>
+#include <vtex/octree/voxel.h>
 
 #include <Eigen/Geometry>
 
@@ -37,6 +39,38 @@ inline SparseVolume randomVolume(std::uint32_t levels, std::size_t count, unsign
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     for (const auto k : keys) v.blocks.push_back(VolumeBlock{k, std::uint8_t(levels), 0, randomVoxel(rng)});
     return v;
+}
+
+/// An octree of 2^levels voxels a side: scattered voxels, each position kept with probability
+/// `fraction` and made by voxel(x, y, z, rng), over a solid isotropic slab of density 3 at z in
+/// [slabBegin, slabEnd), whose constant blocks the compression stores as leaves above the finest
+/// level.
+template <class MakeVoxel>
+Octree scatteredOverSlab(std::uint32_t levels, std::uint32_t slabBegin, std::uint32_t slabEnd, float fraction,
+                         unsigned seed, MakeVoxel&& voxel) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0, 1);
+    SparseVolume v;
+    v.info.levels = levels;
+    const std::uint32_t n = 1u << levels;
+    for (std::uint32_t z = 0; z < n; ++z)
+        for (std::uint32_t y = 0; y < n; ++y)
+            for (std::uint32_t x = 0; x < n; ++x) {
+                const bool slab = z >= slabBegin && z < slabEnd;
+                if (!slab && u(rng) > fraction) continue;
+                VoxelData d;
+                if (slab) {
+                    d.density = 3.0f;
+                    packIsotropic(d);
+                    d.albedo = {0.5f, 0.5f, 0.5f};
+                } else {
+                    d = voxel(x, y, z, rng);
+                }
+                v.blocks.push_back(VolumeBlock{mortonEncode(x, y, z), std::uint8_t(levels), 0, d});
+            }
+    v.sortBlocks();
+    NullProgress progress;
+    return buildOctree(v, BuildOptions{}, progress);
 }
 
 }  // namespace vtex::octree::test
