@@ -189,7 +189,7 @@ private:
         const double tMid = 0.5 * (tIn + tOut);
         const double scale = localScale(prim, 0.5 * (rIn + rOut));
         const int maxLevel = texel.volume->maxLevel();
-        const LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
+        LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
         const Vec3 p0 = tile(rIn, prim), p1 = tile(rOut, prim);
         const double length = (p1 - p0).norm();
         if (!(length > 0) || !std::isfinite(length)) return;
@@ -200,8 +200,11 @@ private:
         // cut-off for the mesh's share.
         const double cutoff = mOptions.approximations.blendCutoff;
         const auto cut = [cutoff](double w) { return w > 0 && w < cutoff ? 0.0 : w > 1 - cutoff ? 1.0 : w; };
-        const double fineWeight = cut(choice.fineWeight);
         const double meshWeight = cut(texel.meshWeight(choice.requested));
+        // Under the mesh's share the volume is the mesh level L alone: the span is (1 − w)·V_L +
+        // w·mesh, continuous at both ends of the blend (docs/render.md, "Blend").
+        choice = detail::volumeUnderMesh(choice, texel.meshLevel);
+        const double fineWeight = cut(choice.fineWeight);
         counters.mesh += meshWeight;
         if (meshWeight >= 1) {  // the mesh alone: none of the volume's per-span set-up
             compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid, state);

@@ -36,8 +36,14 @@ struct TexelRuntime {
     /// measured, between the footprint's and coarsestShadowLevel (texel_runtime.cpp,
     /// shadowLevelsFrom). Empty, or a footprint past its end: max(coarsestShadowLevel, footprint).
     std::vector<int> shadowLevels;
-    /// The level a shadow march takes where its cone asks for level `footprint`.
-    int shadowLevelFor(int footprint) const { return shadowLevelOf(shadowLevels, coarsestShadowLevel, footprint); }
+    /// The level a shadow march takes where its cone asks for level `footprint`: never finer than
+    /// the mesh level, past which the volume is not marched (detail::volumeUnderMesh; a query
+    /// that cannot take the mesh instead, the lattice's near march under a floor seen through
+    /// less than exactFloorShadowAbove, takes the mesh level).
+    int shadowLevelFor(int footprint) const {
+        const int level = shadowLevelOf(shadowLevels, coarsestShadowLevel, footprint);
+        return meshLevel < level ? int(meshLevel) : level;
+    }
     static int shadowLevelOf(const std::vector<int>& shadowLevels, int coarsestShadowLevel, int footprint) {
         if (footprint >= 0 && std::size_t(footprint) < shadowLevels.size()) return shadowLevels[std::size_t(footprint)];
         return std::max(coarsestShadowLevel, footprint);
@@ -55,6 +61,19 @@ struct TexelRuntime {
         return source ? std::clamp(requested - meshLevel, 0.0, 1.0) : 0.0;
     }
 };
+
+/// The volume's levels under the hybrid's blend: a footprint that asks for a level in (L, L + 1),
+/// L = `meshLevel`, takes the mesh with weight λ − L (TexelRuntime::meshWeight) and the volume
+/// at level L alone, not L's blend toward L + 1, which the load measured as not faithful (and
+/// which has eight times L's voxels). Other choices are returned as they are; `level` and
+/// `requested` are always kept: they say what the footprint asked for.
+inline LevelChoice volumeUnderMesh(LevelChoice choice, double meshLevel) {
+    if (choice.requested > meshLevel && double(choice.coarse) == meshLevel) {
+        choice.fine = choice.coarse;
+        choice.fineWeight = 0;
+    }
+    return choice;
+}
 
 /// The shadow levels of footprint levels 0 … coarsest − 1 from the lit fractions of the fitted
 /// levels (texel_runtime.cpp): per footprint level f, among the levels f … coarsest whose lit

@@ -4,6 +4,9 @@
 #include "bush_field.h"
 #include "fixtures.h"
 
+#include "../../render/src/shadow_queries.h"
+#include "../../render/src/texel_runtime.h"
+
 #include <vtex/octree/chord_transmittance.h>
 #include <vtex/render/compare.h>
 #include <vtex/render/reference.h>
@@ -12,7 +15,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <iostream>
+#include <limits>
 
 using namespace vtex::render;
 using namespace vtex::render::test;
@@ -79,6 +84,74 @@ TEST(Hybrid, NoStepInTheMeanAcrossTheSwitch) {
     // with the blend 0.017); bound 0.022.
     EXPECT_LT(largest, 0.04 * means.back());
     EXPECT_LT(largestPixel, 0.022);
+}
+
+// Past the mesh level L a span's volume share is level L alone (renderer.cpp, marchSpan): with
+// every footprint moved to ask for levels around L + 1/2, the hybrid marches no voxel of L + 1,
+// while the same footprints with the hybrid off blend L with L + 1.
+TEST(Hybrid, PastTheMeshLevelTheVolumeMarchesOnlyThatLevel) {
+    const Scene scene = bushField(Eigen::Vector3d(0.5, -2.5, 2.5), 48);
+    RenderOptions options;
+    const RenderResult first = renderQuiet(scene, options);
+    ASSERT_EQ(first.stats.meshLevels.size(), 1u);
+    const int meshLevel = int(first.stats.meshLevels[0]);
+    options.hybrid = false;  // the footprints' mean level, which the hybrid's blend does not move
+    options.lodBias = renderQuiet(scene, options).stats.meanLevel() - (meshLevel + 0.5);
+    const RenderResult volume = renderQuiet(scene, options);
+    options.hybrid = true;
+    const RenderResult hybrid = renderQuiet(scene, options);
+    const auto share = [](const RenderResult& r, int level) {
+        const auto& h = r.stats.levelHistogram;
+        return std::size_t(level) < h.size() ? h[std::size_t(level)] / double(r.stats.cellSegments) : 0.0;
+    };
+    std::cout << "mesh level " << meshLevel << ": hybrid, shares of levels L and L + 1 " << share(hybrid, meshLevel) << ", "
+              << share(hybrid, meshLevel + 1) << ", mesh " << hybrid.stats.meshSegments / double(hybrid.stats.cellSegments)
+              << "; volume only " << share(volume, meshLevel) << ", " << share(volume, meshLevel + 1) << "\n";
+    // The view is in the blend: part mesh, part volume, and without the hybrid it asks for L + 1.
+    EXPECT_GT(hybrid.stats.meshSegments, 0.1 * double(hybrid.stats.cellSegments));
+    EXPECT_LT(hybrid.stats.meshSegments, 0.9 * double(hybrid.stats.cellSegments));
+    EXPECT_GT(share(volume, meshLevel + 1), 0.1);
+    EXPECT_GT(share(hybrid, meshLevel), 0.1);
+    EXPECT_EQ(share(hybrid, meshLevel + 1), 0.0);
+}
+
+// The rule both camera spans and shadow rays take under the mesh's share: a footprint between
+// the mesh level L and L + 1 takes level L alone (the camera's level blend toward L + 1 goes,
+// and a shadow takes L's shadow level, not L + 1's); outside that range nothing changes.
+TEST(Hybrid, UnderTheMeshsShareTheVolumeIsTheMeshLevel) {
+    using detail::volumeUnderMesh;
+    const double meshLevel = 4;
+    const auto at = [](double level) { return chooseLevel(std::exp2(-level), 0, 6); };
+    for (const double level : {4.05, 4.3, 4.6, 4.95}) {
+        const LevelChoice c = volumeUnderMesh(at(level), meshLevel);
+        EXPECT_EQ(c.coarse, 4);
+        EXPECT_EQ(c.fine, 4);
+        EXPECT_EQ(c.fineWeight, 0.0);
+        EXPECT_NEAR(c.level, level, 1e-12);      // what the footprint asked for is kept
+        EXPECT_NEAR(c.requested, level, 1e-12);
+    }
+    for (const double level : {2.5, 3.7, 4.0, 5.0, 5.5}) {  // the volume alone, or the mesh alone
+        const LevelChoice before = at(level), after = volumeUnderMesh(before, meshLevel);
+        EXPECT_EQ(after.coarse, before.coarse);
+        EXPECT_EQ(after.fine, before.fine);
+        EXPECT_EQ(after.fineWeight, before.fineWeight);
+    }
+    EXPECT_EQ(volumeUnderMesh(at(4.5), std::numeric_limits<double>::infinity()).fine, 5);  // no mesh
+    // Shadows: the footprint at 4.6 asks for level 5; under the mesh's share a shadow takes L's
+    // shadow level, and no shadow level is finer than L (a query that cannot take the mesh).
+    detail::TexelRuntime texel;
+    texel.coarsestShadowLevel = 3;
+    texel.shadowLevels = {0, 1, 1};
+    EXPECT_EQ(detail::ShadowQueries::footprintOf(at(4.6)), 5);
+    EXPECT_EQ(texel.shadowLevelFor(2), 1);  // without a mesh: the fitted table, then the footprint
+    EXPECT_EQ(texel.shadowLevelFor(5), 5);
+    EXPECT_EQ(texel.shadowLevelFor(7), 7);
+    texel.meshLevel = meshLevel;
+    EXPECT_EQ(texel.shadowLevelFor(2), 1);
+    EXPECT_EQ(texel.shadowLevelFor(4), 4);
+    EXPECT_EQ(texel.shadowLevelFor(5), 4);
+    EXPECT_EQ(texel.shadowLevelFor(7), 4);
+    EXPECT_EQ(detail::ShadowQueries::shadowLevel(texel, volumeUnderMesh(at(4.6), meshLevel)), 4);
 }
 
 // The renderer used to light voxels by the first 16 lights only: a scene whose 17th light is
