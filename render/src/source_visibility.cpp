@@ -45,7 +45,7 @@ SourceFidelity measureSourceFidelity(const octree::Octree& tree, const ingest::T
     while (profile.profiles(out.profiledLevels)) ++out.profiledLevels;
     const FaithfulLevels faithful = faithfulLevels(out.chords, RenderOptions{}.hybridTolerance);
     for (const octree::ShellChordFit& fit :
-         octree::fitShellChords(tree, visible, 1, kLevelFitChords, 1, std::uint32_t(faithful.finest + 1)))
+         octree::fitShellChords(tree, visible, 1, kLevelFitChords, 1, std::uint32_t(faithful.finest)))
         out.fitScale.push_back(fit.scale);
     out.fitted = octree::measureChordTransmittance(tree, visible, out.fitScale);
     return out;

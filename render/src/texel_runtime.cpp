@@ -142,8 +142,9 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             // chords differ from the mesh's per chord, which a scale per level does not change.
             // kLevelFitChords: on a texel of clustered discs a fit then lets through what the mesh
             // does within 0.003 on other chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
-            // With the hybrid on, a level finer than the mesh level's next is never marched.
-            const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest + 1) : 30u;
+            // With the hybrid on, no level finer than the mesh level (≤ the finest faithful one)
+            // is marched, by camera or shadow rays (detail::volumeUnderMesh).
+            const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest) : 30u;
             int meshLevel = faithful.finest;
             if (options.fitLevels) {
                 for (const octree::ShellChordFit& fit : octree::fitShellChords(medium, visible, def.tau, kLevelFitChords, 1, finest))
