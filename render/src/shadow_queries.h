@@ -211,12 +211,12 @@ public:
                 const LevelChoice choice = chooseLevel(width / localScale(prim, 0.5 * (rIn + rOut)),
                                                        mOptions.lodBias, texel.volume->maxLevel());
                 // The hybrid's rule for shadows too: the source mesh where the footprint is finer
-                // than the volume is faithful, blended over the next level with the volume at the
-                // mesh level's shadow level (as camera spans, detail::volumeUnderMesh).
+                // than the volume is faithful, blended over the next level with the volume at a
+                // level no finer than the mesh level's (TexelRuntime::shadowLevelFor).
                 const double meshWeight = texel.meshWeight(choice.requested);
                 double result = 0;
                 if (meshWeight < 1) {
-                    const int level = shadowLevel(texel, volumeUnderMesh(choice, texel.meshLevel));
+                    const int level = shadowLevel(texel, choice);
                     const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level,
                                                                         kTransmittanceCutoff / transmittance);
                     counters.voxels += seg.blocks;

@@ -143,7 +143,7 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             // kLevelFitChords: on a texel of clustered discs a fit then lets through what the mesh
             // does within 0.003 on other chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
             // With the hybrid on, no level finer than the mesh level (≤ the finest faithful one)
-            // is marched, by camera or shadow rays (detail::volumeUnderMesh).
+            // is marched, by camera or shadow rays (volumeUnderMesh, TexelRuntime::shadowLevelFor).
             const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest) : 30u;
             int meshLevel = faithful.finest;
             if (options.fitLevels) {

@@ -37,9 +37,10 @@ struct TexelRuntime {
     /// shadowLevelsFrom). Empty, or a footprint past its end: max(coarsestShadowLevel, footprint).
     std::vector<int> shadowLevels;
     /// The level a shadow march takes where its cone asks for level `footprint`: never finer than
-    /// the mesh level, past which the volume is not marched (detail::volumeUnderMesh; a query
-    /// that cannot take the mesh instead, the lattice's near march under a floor seen through
-    /// less than exactFloorShadowAbove, takes the mesh level).
+    /// the mesh level, past which the volume is not marched (as volumeUnderMesh for camera
+    /// spans). So a traced shadow's volume share under the mesh's takes L, and the one query that
+    /// cannot take the mesh instead (the lattice's near march under a floor seen through less
+    /// than exactFloorShadowAbove) takes L too.
     int shadowLevelFor(int footprint) const {
         const int level = shadowLevelOf(shadowLevels, coarsestShadowLevel, footprint);
         return meshLevel < level ? int(meshLevel) : level;

@@ -115,9 +115,10 @@ TEST(Hybrid, PastTheMeshLevelTheVolumeMarchesOnlyThatLevel) {
     EXPECT_EQ(share(hybrid, meshLevel + 1), 0.0);
 }
 
-// The rule both camera spans and shadow rays take under the mesh's share: a footprint between
-// the mesh level L and L + 1 takes level L alone (the camera's level blend toward L + 1 goes,
-// and a shadow takes L's shadow level, not L + 1's); outside that range nothing changes.
+// The rule camera spans take under the mesh's share: a footprint between the mesh level L and
+// L + 1 takes level L alone (its level blend toward L + 1 goes); outside that range nothing
+// changes. Shadows: no shadow level is finer than L, so a shadow under the mesh's share takes
+// L's shadow level, not L + 1's.
 TEST(Hybrid, UnderTheMeshsShareTheVolumeIsTheMeshLevel) {
     using detail::volumeUnderMesh;
     const double meshLevel = 4;
@@ -137,8 +138,7 @@ TEST(Hybrid, UnderTheMeshsShareTheVolumeIsTheMeshLevel) {
         EXPECT_EQ(after.fineWeight, before.fineWeight);
     }
     EXPECT_EQ(volumeUnderMesh(at(4.5), std::numeric_limits<double>::infinity()).fine, 5);  // no mesh
-    // Shadows: the footprint at 4.6 asks for level 5; under the mesh's share a shadow takes L's
-    // shadow level, and no shadow level is finer than L (a query that cannot take the mesh).
+    // Shadows: the footprint at 4.6 asks for level 5, and takes L = 4 once the texel has a mesh.
     detail::TexelRuntime texel;
     texel.coarsestShadowLevel = 3;
     texel.shadowLevels = {0, 1, 1};
@@ -151,7 +151,7 @@ TEST(Hybrid, UnderTheMeshsShareTheVolumeIsTheMeshLevel) {
     EXPECT_EQ(texel.shadowLevelFor(4), 4);
     EXPECT_EQ(texel.shadowLevelFor(5), 4);
     EXPECT_EQ(texel.shadowLevelFor(7), 4);
-    EXPECT_EQ(detail::ShadowQueries::shadowLevel(texel, volumeUnderMesh(at(4.6), meshLevel)), 4);
+    EXPECT_EQ(detail::ShadowQueries::shadowLevel(texel, at(4.6)), 4);
 }
 
 // The renderer used to light voxels by the first 16 lights only: a scene whose 17th light is
