@@ -36,7 +36,7 @@ ApproximationBudget ApproximationBudget::exact() {
     b.chainLatticeNodes = false;
     b.nearShadowTable = false;
     b.blendCutoff = 0;
-    b.reflectanceReuseWeight = 0;
+    b.lightingReuseWeight = 0;
     b.exactFloorShadowAbove = 0;
     b.shadowRefresh = 1;
     return b;
@@ -49,7 +49,7 @@ std::string ApproximationBudget::key() const {
     k.precision(17);
     k << "share_shadow_rays " << shareShadowRays << " shadow_cache_resolution " << shadowCacheResolution
       << " chain_lattice_nodes " << chainLatticeNodes << " near_shadow_table " << nearShadowTable << " blend_cutoff "
-      << blendCutoff << " reflectance_reuse_weight " << reflectanceReuseWeight << " exact_floor_shadow_above "
+      << blendCutoff << " lighting_reuse_weight " << lightingReuseWeight << " exact_floor_shadow_above "
       << exactFloorShadowAbove << " shadow_refresh " << shadowRefresh;
     return k.str();
 }
@@ -221,8 +221,10 @@ private:
         } else {
             // The second (fine) march of a blend takes the first's shadow queries taken within
             // one coarse voxel (shareShadowRays): the origin moves by at most that, bounded by the
-            // test SharedShadowRaysMatchPerLevelShadowRays.
-            result = mMarcher.march(span, choice.coarse, mOptions.approximations.shareShadowRays, 1 - fineWeight, counters);
+            // test SharedShadowRaysMatchPerLevelShadowRays. Without a second march (its weight
+            // cut) nothing is recorded.
+            const bool share = mOptions.approximations.shareShadowRays && fineWeight > 0;
+            result = mMarcher.march(span, choice.coarse, share, 1 - fineWeight, counters);
             if (fineWeight > 0) blend(result, mMarcher.march(span, choice.fine, false, fineWeight, counters), fineWeight);
         }
         if (meshWeight > 0)

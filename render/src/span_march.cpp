@@ -145,7 +145,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
     const Material& m = span.texel.material;
     const Vec3 view = -span.dir;
     const double shadowRefresh = std::clamp(mOptions.approximations.shadowRefresh, 1e-6, 1.0);
-    const double reuseWeight = std::max(mOptions.approximations.reflectanceReuseWeight, 0.0);
+    const double reuseWeight = std::max(mOptions.approximations.lightingReuseWeight, 0.0);
     double reusedShare = 0;
     const double tau = span.texel.tauAt(level);
     ProfileFactor profile(*span.texel.volume, level, span.p0, span.dir);
@@ -158,10 +158,10 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
             const double transmit = std::exp(-sigma * ds);
             const double alpha = 1 - transmit;
             if (!(alpha > 0)) return true;
-            // Reflectance reuse (RenderOptions::approximations.reflectanceReuseWeight): a voxel
-            // with a tiny share of the pixel takes the march's last reflectance for its light.
+            // Lighting reuse (RenderOptions::approximations.lightingReuseWeight): a voxel with a
+            // tiny share of the pixel takes the march's last shadow and reflectance for each light.
             const double share = span.startT * r.transmittance * alpha * blendWeight;
-            const bool reuse = share < reuseWeight && reusedShare + share <= ApproximationBudget::kReflectanceReuseBudget * reuseWeight;
+            const bool reuse = share < reuseWeight && reusedShare + share <= ApproximationBudget::kLightingReuseBudget * reuseWeight;
             VoxelPoint point(span, s + 0.5 * ds);
             const Color albedo(voxel.albedo[0], voxel.albedo[1], voxel.albedo[2]);
             Color lk = m.ambient.cwiseProduct(albedo);
@@ -174,8 +174,17 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                 if (!sl.directional && !lightAt(mScene.lights[i], point.world(), lw, distance, e)) continue;
                 // A shadow query at the first lit voxel, another each time the march's
                 // transmittance has fallen below shadowRefresh of what it was at the last one
-                // (1, the default: at every absorbing voxel).
-                if (!ml.shadowValid || r.transmittance < shadowRefresh * ml.shadowAt) {
+                // (1, the default: at every absorbing voxel). A reusing voxel takes the last
+                // query's shadow and the last reflectance instead (evaluated afresh only if the
+                // march has none yet): its light's radiance stays between 0 and the largest a voxel
+                // reflects, like the exact one's, so the pixel moves by at most the reused shares'
+                // sum times that (ApproximationBudget::lightingReuseWeight). A blend's coarse march
+                // records only the queries it takes: the fine march then shares one within a coarse
+                // voxel, as before, or takes its own (shareShadowRays).
+                const bool reuseShadow = reuse && ml.shadowValid;
+                if (reuseShadow) {
+                    reusedShare += share;
+                } else if (!ml.shadowValid || r.transmittance < shadowRefresh * ml.shadowAt) {
                     ml.shadow = shadowQuery(span, i, lw, distance, point, record, ml.reuseAt, counters);
                     ml.shadowAt = r.transmittance;
                     ml.shadowValid = true;
@@ -184,7 +193,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                 Vec3 lr = sl.lr;
                 if (sl.directional ? !sl.usable : !span.referenceLight(lw, lr)) continue;
                 if (reuse && ml.haveReflectance) {
-                    reusedShare += share;
+                    if (!reuseShadow) reusedShare += share;
                 } else {
                     ++counters.reflectance;
                     ml.reflectance = reflectance(sl, m, voxel.s, lr, view);

@@ -169,7 +169,7 @@ TEST(Render, EveryLightLightsTexelVoxels) {
     many.lights.push_back(one.lights[0]);
     RenderOptions options;
     options.hybrid = false;              // the voxels' lighting, not the mesh's
-    options.approximations.reflectanceReuseWeight = 0;  // its budget is spent per light: dark lights would move it
+    options.approximations.lightingReuseWeight = 0;  // its budget is spent per light: dark lights would move it
     const Image a = renderQuiet(one, options).image, b = renderQuiet(many, options).image;
     EXPECT_GT(imageMean(a).sum(), 0.0);
     EXPECT_LT(compareImages(a, b).rmse, 1e-6 * imageMean(a).sum() + 1e-9);

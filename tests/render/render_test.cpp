@@ -250,6 +250,7 @@ TEST(Render, SharedShadowRaysMatchPerLevelShadowRays) {
     scene.lights[0].direction = Eigen::Vector3d(-0.8, 0.3, -0.5).normalized();
     RenderOptions o;
     o.approximations.shadowCacheResolution = 0;  // every query casts its ray (see CachedShadowsMatchShadowRays)
+    o.approximations.lightingReuseWeight = 0;    // every voxel queries (see ReusedLightingStaysWithinItsBound)
     o.approximations.shareShadowRays = false;
     const RenderResult exact = renderQuiet(scene, o);
     o.approximations.shareShadowRays = true;
@@ -361,10 +362,13 @@ TEST(Render, SkippedBlendLevelsMatchTheFullBlend) {
     EXPECT_NEAR(exact.stats.meanLevel(), skipped.stats.meanLevel(), 0.05);
 }
 
-// Voxels with a tiny share of the pixel reuse the march's last reflectance: each pixel moves by
-// at most the reused shares' budget (10 × reflectanceReuseWeight) times the largest radiance a
-// voxel can reflect, E·(kd·max albedo/π + ks·(n+2)/2π), and fewer reflectances are evaluated.
-TEST(Render, ReusedReflectanceStaysWithinItsBound) {
+// Voxels with a tiny share of the pixel reuse the march's last shadow and reflectance: each
+// pixel moves by at most the reused shares' budget (kLightingReuseBudget × lightingReuseWeight)
+// times the largest radiance a voxel can reflect, E·(kd·max albedo/π + ks·(n+2)/2π), and fewer
+// reflectances are evaluated and fewer shadows queried. Each blend's fine march casts its own
+// queries here: shared ones (shareShadowRays) would move with the coarse march's reuse, which is
+// the sharing's approximation, bounded by SharedShadowRaysMatchPerLevelShadowRays.
+TEST(Render, ReusedLightingStaysWithinItsBound) {
     // Fibres leaning every way, so that neighbouring voxels reflect differently.
     Scene scene = grassPlane(64);
     std::mt19937 rng(3);
@@ -378,21 +382,24 @@ TEST(Render, ReusedReflectanceStaysWithinItsBound) {
         }
     scene.texels[0].octree = std::make_shared<const vtex::octree::Octree>(std::move(tree));
     RenderOptions o;
-    o.approximations.reflectanceReuseWeight = 0;
+    o.approximations.shareShadowRays = false;
+    const RenderResult reused = renderQuiet(scene, o);
+    o.approximations.lightingReuseWeight = 0;
     const RenderResult exact = renderQuiet(scene, o);
-    const RenderResult reused = renderQuiet(scene, {});
     float albedo = 0;
     for (const auto& level : scene.texels[0].octree->levels)
         for (const auto& node : level) albedo = std::max({albedo, node.data.albedo[0], node.data.albedo[1], node.data.albedo[2]});
-    const double bound = ApproximationBudget::kReflectanceReuseBudget * ApproximationBudget{}.reflectanceReuseWeight *
+    const double bound = ApproximationBudget::kLightingReuseBudget * ApproximationBudget{}.lightingReuseWeight *
                          largestPhongRadiance(scene.lights[0].color.maxCoeff(), scene.texels[0].material, albedo);
     const double worst = maxAbsDifference(exact.image, reused.image);
-    std::cout << "reflectance reuse: worst pixel " << worst << " (bound " << bound << "), RMSE "
+    std::cout << "lighting reuse: worst pixel " << worst << " (bound " << bound << "), RMSE "
               << rmse(exact.image, reused.image) << ", evaluations " << reused.stats.reflectanceEvaluations << " vs "
-              << exact.stats.reflectanceEvaluations << "\n";
+              << exact.stats.reflectanceEvaluations << ", shadow queries " << reused.stats.shadowRays << " vs "
+              << exact.stats.shadowRays << "\n";
     EXPECT_GT(worst, 0);
     EXPECT_LE(worst, bound);
     EXPECT_LT(reused.stats.reflectanceEvaluations, 0.9 * double(exact.stats.reflectanceEvaluations));
+    EXPECT_LT(reused.stats.shadowRays, 0.9 * double(exact.stats.shadowRays));
 }
 
 // Floors seen through less than exactFloorShadowAbove take their shadows from the cell's lattice:
