@@ -180,9 +180,10 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                 // reflects, like the exact one's, so the pixel moves by at most the reused shares'
                 // sum times that (ApproximationBudget::lightingReuseWeight). A blend's coarse march
                 // records only the queries it takes: the fine march then shares one within a coarse
-                // voxel, as before, or takes its own (shareShadowRays).
-                const bool reuseShadow = reuse && ml.shadowValid;
-                if (reuseShadow) {
+                // voxel, as before, or takes its own (shareShadowRays). (A march has a reflectance
+                // only once it has a shadow: `reused` covers both.)
+                const bool reused = reuse && ml.shadowValid;
+                if (reused) {
                     reusedShare += share;
                 } else if (!ml.shadowValid || r.transmittance < shadowRefresh * ml.shadowAt) {
                     ml.shadow = shadowQuery(span, i, lw, distance, point, record, ml.reuseAt, counters);
@@ -192,9 +193,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
                 if (ml.shadow <= 0) continue;
                 Vec3 lr = sl.lr;
                 if (sl.directional ? !sl.usable : !span.referenceLight(lw, lr)) continue;
-                if (reuse && ml.haveReflectance) {
-                    if (!reuseShadow) reusedShare += share;
-                } else {
+                if (!reused || !ml.haveReflectance) {
                     ++counters.reflectance;
                     ml.reflectance = reflectance(sl, m, voxel.s, lr, view);
                     ml.haveReflectance = true;

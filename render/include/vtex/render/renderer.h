@@ -91,7 +91,7 @@ struct ApproximationBudget {
     /// sum (3 % of the largest reflected radiance) (docs/render.md, "Shading"). 0: every voxel
     /// takes its own (exact). 1e-2 since issue 12 (1e-3 with a budget of 10× before); the
     /// shadow's reuse since the seventeenth session: on the bush field's middle view 42 % fewer
-    /// shadow queries and 9 % less time, image mean 0.35 % darker (docs/error-vs-time.md).
+    /// shadow queries and about 10 % less time, image mean 0.35 % darker (docs/error-vs-time.md).
     double lightingReuseWeight = 1e-2;
     static constexpr double kLightingReuseBudget = 3;
     /// The base surface of a texel cell, seen through a transmittance at least this, casts exact
