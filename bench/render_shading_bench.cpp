@@ -6,10 +6,12 @@
 #include <vtex/primitive/reflectance_kernel.h>
 
 #include "bush_voxels.h"
+#include "fibre_specular.h"
 
 #include <Eigen/Geometry>
 #include <benchmark/benchmark.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -123,6 +125,44 @@ void BM_ReflectanceKernel(benchmark::State& state) { kernelOn(state, cases()); }
 BENCHMARK(BM_ReflectanceKernel)->Arg(40)->Arg(15);
 void BM_ReflectanceKernelBush(benchmark::State& state) { kernelOn(state, bushCases()); }
 BENCHMARK(BM_ReflectanceKernelBush)->Arg(40)->Arg(200);
+
+// The random mix split by the fibre limit's gate at shininess 20 (the kernel's own test,
+// detail::takesFibreLimit): needles on the fibre limit (477 of the 1024) and the rest, to see
+// where the mix's time goes (docs/micro-primitive.md). Each set keeps its cases' order.
+const Cases& splitCases(bool needles) {
+    static const std::array<Cases, 2> split = [] {
+        std::array<Cases, 2> out;
+        const Cases& all = cases();
+        const double gate = vtex::primitive::detail::fibreEigenRatioGate(20);
+        for (std::size_t k = 0; k < kCases; ++k) {
+            const Eigen::Matrix3d m = all.s[k].matrix();
+            const bool needle = vtex::primitive::detail::takesFibreLimit(
+                m.trace(), vtex::primitive::detail::adjugate(m).trace(), m.determinant(), gate);
+            Cases& c = out[needle ? 1 : 0];
+            c.s.push_back(all.s[k]);
+            c.light.push_back(all.light[k]);
+            c.view.push_back(all.view[k]);
+        }
+        return out;
+    }();
+    return split[needles ? 1 : 0];
+}
+// One kernel per case, built before timing (the cases' l and v no longer come in runs of eight).
+void splitKernelOn(benchmark::State& state, bool needles) {
+    const Cases& c = splitCases(needles);
+    std::vector<ReflectanceKernel> kernels;
+    for (std::size_t k = 0; k < c.s.size(); ++k) kernels.emplace_back(c.light[k], c.view[k], 20);
+    std::size_t i = 0;
+    for (auto _ : state) {
+        const std::size_t k = i++ % c.s.size();
+        benchmark::DoNotOptimize(kernels[k](c.s[k]));
+    }
+    state.counters["cases"] = double(c.s.size());
+}
+void BM_ReflectanceKernelNeedles(benchmark::State& state) { splitKernelOn(state, true); }
+BENCHMARK(BM_ReflectanceKernelNeedles);
+void BM_ReflectanceKernelNotNeedles(benchmark::State& state) { splitKernelOn(state, false); }
+BENCHMARK(BM_ReflectanceKernelNotNeedles);
 
 // What a ray segment pays once per light before its voxels: building the kernel.
 void BM_ReflectanceKernelSetup(benchmark::State& state) {
