@@ -207,7 +207,7 @@ private:
         const double fineWeight = cut(choice.fineWeight);
         counters.mesh += meshWeight;
         if (meshWeight >= 1) {  // the mesh alone: none of the volume's per-span set-up
-            compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, counters), choice.level, tMid, state);
+            compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, choice, scale, counters), choice.level, tMid, state);
             return;
         }
         SpanContext span(mScene, mOptions, mShadows, prim, surface, texel, rIn, rOut, tIn, tOut, scale,
@@ -228,7 +228,7 @@ private:
             if (fineWeight > 0) blend(result, mMarcher.march(span, choice.fine, false, fineWeight, counters), fineWeight);
         }
         if (meshWeight > 0)
-            blend(result, traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, counters), meshWeight);
+            blend(result, traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, choice, scale, counters), meshWeight);
         compositeSpan(result, choice.level, tMid, state);
     }
 
@@ -251,18 +251,47 @@ private:
     // The span through the texel's source mesh instead of its volume (the hybrid): the first
     // triangle on the tiled reference-space segment p0 → p1, opaque and two-sided, shaded as the
     // reference renderer shades it (the texel's material, the mesh's albedo, the normal taken
-    // to the world by the inverse transpose of the tiled map's Jacobian), its shadows by the
-    // hybrid rule of tracedShadow.
-    SpanResult traceSourceSpan(const Prim& prim, const TexelRuntime& texel, const Vec3& p0,
-                               const Vec3& p1, double tIn, double tOut, const Vec3& d, Counters& counters) const {
+    // to the world by the inverse transpose of the tiled map's Jacobian), its shadows through the
+    // source meshes (tracedShadow's fromSourceHit). Where the footprint is coarser than a voxel
+    // of level L + 1 (TexelRuntime::meshRaysPerAxis) the span takes k × k parallel segments on a
+    // stratified grid across the footprint (the cone's width at the span's middle, reference
+    // units, as the level was chosen from), their radiance and transmittance averaged: the
+    // mesh's coverage of the footprint rather than one point of it. Segments that leave the
+    // cell's side go on in the tiled copy beside it, which is the neighbour's on a flat base (the
+    // mild-deformation assumption of the march); spans are composited as volume spans are, so
+    // what hides what between two spans is that of their coverages.
+    SpanResult traceSourceSpan(const Prim& prim, const TexelRuntime& texel, const Vec3& p0, const Vec3& p1, double tIn,
+                               double tOut, const Vec3& d, const LevelChoice& choice, double scale,
+                               Counters& counters) const {
+        const int k = texel.meshRaysPerAxis(choice.requested);
+        if (k <= 1) return traceSourceSegment(prim, texel, p0, p1, tIn, tOut, d, counters);
+        const Vec3 axis = (p1 - p0).normalized();
+        const Vec3 u = axis.unitOrthogonal(), v = axis.cross(u);
+        const double width = mConeSpread * 0.5 * (tIn + tOut) / scale;
+        SpanResult sum{Color::Zero(), 0.0};
+        for (int i = 0; i < k; ++i)
+            for (int j = 0; j < k; ++j) {
+                const Vec3 offset = width * (((i + 0.5) / k - 0.5) * u + ((j + 0.5) / k - 0.5) * v);
+                const SpanResult r = traceSourceSegment(prim, texel, p0 + offset, p1 + offset, tIn, tOut, d, counters);
+                sum.radiance += r.radiance;
+                sum.transmittance += r.transmittance;
+            }
+        const double n = double(k * k);
+        return {sum.radiance / n, sum.transmittance / n};
+    }
+    SpanResult traceSourceSegment(const Prim& prim, const TexelRuntime& texel, const Vec3& p0, const Vec3& p1,
+                                  double tIn, double tOut, const Vec3& d, Counters& counters) const {
         const auto hit = texel.source->intersect(p0, p1, 0);
         if (!hit) return {};
         const detail::SourcePoint p = detail::sourcePoint(prim, p0 + hit->s * (p1 - p0), hit->normal, d);
         const double t = tIn + hit->s * (tOut - tIn);
+        // A hit past the cell's side (an offset segment's) has no cell the caller knows.
+        const bool inCell = p.cell.x() >= 0 && p.cell.x() <= 1 && p.cell.y() >= 0 && p.cell.y() <= 1;
         const Color radiance = detail::shadePhong(
             mScene.lights, p.world, p.normal, p.normal, -d, texel.material, hit->albedo, p.scale,
             [&](const Vec3& origin, const Vec3& l, double distance) {
-                return mShadows.tracedShadow(origin, l, distance, mConeSpread * t, prim.index, p.cell, counters);
+                return mShadows.tracedShadow(origin, l, distance, mConeSpread * t, inCell ? prim.index : -1, p.cell,
+                                             counters, true);
             });
         return {radiance, 0.0};
     }

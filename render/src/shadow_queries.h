@@ -178,7 +178,7 @@ public:
         const LevelChoice choice = chooseLevel(spacing, mOptions.lodBias, texel.volume->maxLevel());
         // The one place a pixel can depend on the others rendered: the render warns (chainCut).
         if (depth >= kMaxChain) mChainCut.store(true, std::memory_order_relaxed);
-        if (depth >= kMaxChain || texel.meshWeight(choice.requested) > 0 ||
+        if (depth >= kMaxChain || texel.shadowMeshWeight(choice.requested) > 0 ||
             !mOptions.approximations.chainLatticeNodes)
             return exactFrom(rn);
         Vec3 lr = tiledJacobian(prim, rn).inverse() * l;
@@ -198,22 +198,30 @@ public:
     // may depend on the order of the tiles and on which rows were rendered.
     bool chainCut() const { return mChainCut.load(std::memory_order_relaxed); }
 
-    // The exact path: one ray toward the light.
+    // The exact path: one ray toward the light. `fromSourceHit`: the ray leaves a point of a
+    // texel's source mesh (the hybrid's mesh span), and every texel with a source is then tested
+    // against its mesh alone, whatever the cone's width: the volume around the hit holds the lit
+    // leaf's own density and would shadow the leaf (the self-shadowing of issue 12). Its first
+    // segment skips the self-intersection gap even without a hint (a hit of a segment offset
+    // across the footprint may lie past the cell's side, where the caller has no cell for it).
     double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
-                        Counters& counters) const {
+                        Counters& counters, bool fromSourceHit = false) const {
         ++counters.shadow;
+        bool first = true;
         return walkShadowRay(
             mTracer, mSurfaces, o, l, tMax, hintPrim, hintR, kTransmittanceCutoff,
             [&](const Prim& prim, const SurfaceRuntime& surface, const Vec3& rIn, const Vec3& rOut, bool startsAtHint,
                 double transmittance) {
+                const bool leavesHit = startsAtHint || (fromSourceHit && first);
+                first = false;
                 const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
                 const Vec3 p0 = tile(rIn, prim), p1 = tile(rOut, prim);
                 const LevelChoice choice = chooseLevel(width / localScale(prim, 0.5 * (rIn + rOut)),
                                                        mOptions.lodBias, texel.volume->maxLevel());
                 // The hybrid's rule for shadows too: the source mesh where the footprint is finer
                 // than the volume is faithful, blended over the next level with the volume at a
-                // level no finer than the mesh level's (TexelRuntime::shadowLevelFor).
-                const double meshWeight = texel.meshWeight(choice.requested);
+                // level no finer than the mesh level (TexelRuntime::shadowMeshWeight, shadowLevelFor).
+                const double meshWeight = fromSourceHit && texel.source ? 1.0 : texel.shadowMeshWeight(choice.requested);
                 double result = 0;
                 if (meshWeight < 1) {
                     const int level = shadowLevel(texel, choice);
@@ -222,7 +230,7 @@ public:
                     counters.voxels += seg.blocks;
                     result = (1 - meshWeight) * seg.transmittance;
                 }
-                if (meshWeight > 0 && !texel.source->occludedLeaving(p0, p1, startsAtHint)) result += meshWeight;
+                if (meshWeight > 0 && !texel.source->occludedLeaving(p0, p1, leavesHit)) result += meshWeight;
                 return result;
             });
     }

@@ -127,9 +127,11 @@ TEST(RowRange, TexelRenderRangesStackIntoTheWholeRender) {
 
 // The bush field under its directional light: the shadow lattice (nodes filled by whichever
 // pixel needs them first), the hybrid's mesh and the fitted levels (measured at load) all take
-// part, and none may make a pixel depend on which others were rendered.
+// part, and none may make a pixel depend on which others were rendered. (From nearer, (0.5, −1.2,
+// 1.6), the mesh, which lights its own hits through the mesh, takes nearly every span and the
+// lattice no longer shows.)
 TEST(RowRange, ShadowLatticeHybridAndFittedLevelsStackIntoTheWholeRender) {
-    const Scene scene = sized(bushField(Eigen::Vector3d(0.5, -1.2, 1.6)));
+    const Scene scene = sized(bushField(Eigen::Vector3d(0.5, -1.8, 2.0)));
     const RenderOptions options;
     const RenderResult lattice = texelRender(scene, options, 0, 0);
     RenderOptions rays = options;
