@@ -207,7 +207,8 @@ private:
         const double fineWeight = cut(choice.fineWeight);
         counters.mesh += meshWeight;
         if (meshWeight >= 1) {  // the mesh alone: none of the volume's per-span set-up
-            compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, choice, scale, counters), choice.level, tMid, state);
+            compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, choice, scale, counters), choice.level,
+                          tMid, state);
             return;
         }
         SpanContext span(mScene, mOptions, mShadows, prim, surface, texel, rIn, rOut, tIn, tOut, scale,

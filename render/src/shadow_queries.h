@@ -221,7 +221,8 @@ public:
                 // The hybrid's rule for shadows too: the source mesh where the footprint is finer
                 // than the volume is faithful, blended over the next level with the volume at a
                 // level no finer than the mesh level (TexelRuntime::shadowMeshWeight, shadowLevelFor).
-                const double meshWeight = fromSourceHit && texel.source ? 1.0 : texel.shadowMeshWeight(choice.requested);
+                const double meshWeight =
+                    fromSourceHit && texel.source ? 1.0 : texel.shadowMeshWeight(choice.requested);
                 double result = 0;
                 if (meshWeight < 1) {
                     const int level = shadowLevel(texel, choice);
