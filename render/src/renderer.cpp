@@ -188,8 +188,9 @@ private:
         const TexelRuntime& texel = mTexels[std::size_t(surface.texel)];
         const double tMid = 0.5 * (tIn + tOut);
         const double scale = localScale(prim, 0.5 * (rIn + rOut));
+        const double footprint = mConeSpread * tMid / scale;  // the cone's width, reference units
         const int maxLevel = texel.volume->maxLevel();
-        LevelChoice choice = chooseLevel(mConeSpread * tMid / scale, mOptions.lodBias, maxLevel);
+        LevelChoice choice = chooseLevel(footprint, mOptions.lodBias, maxLevel);
         const Vec3 p0 = tile(rIn, prim), p1 = tile(rOut, prim);
         const double length = (p1 - p0).norm();
         if (!(length > 0) || !std::isfinite(length)) return;
@@ -207,7 +208,7 @@ private:
         const double fineWeight = cut(choice.fineWeight);
         counters.mesh += meshWeight;
         if (meshWeight >= 1) {  // the mesh alone: none of the volume's per-span set-up
-            compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, choice, scale, counters), choice.level,
+            compositeSpan(traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, choice.requested, footprint, counters), choice.level,
                           tMid, state);
             return;
         }
@@ -229,7 +230,7 @@ private:
             if (fineWeight > 0) blend(result, mMarcher.march(span, choice.fine, false, fineWeight, counters), fineWeight);
         }
         if (meshWeight > 0)
-            blend(result, traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, choice, scale, counters), meshWeight);
+            blend(result, traceSourceSpan(prim, texel, p0, p1, tIn, tOut, d, choice.requested, footprint, counters), meshWeight);
         compositeSpan(result, choice.level, tMid, state);
     }
 
@@ -255,20 +256,18 @@ private:
     // to the world by the inverse transpose of the tiled map's Jacobian), its shadows through the
     // source meshes (tracedShadow's fromSourceHit). Where the footprint is coarser than a voxel
     // of level L + 1 (TexelRuntime::meshRaysPerAxis) the span takes k × k parallel segments on a
-    // stratified grid across the footprint (the cone's width at the span's middle, reference
-    // units, as the level was chosen from), their radiance and transmittance averaged: the
+    // stratified grid across the footprint (`width`: the cone's at the span's middle, reference
+    // units, the level was chosen from), their radiance and transmittance averaged: the
     // mesh's coverage of the footprint rather than one point of it. Segments that leave the
     // cell's side go on in the tiled copy beside it, which is the neighbour's on a flat base (the
     // mild-deformation assumption of the march); spans are composited as volume spans are, so
     // what hides what between two spans is that of their coverages.
     SpanResult traceSourceSpan(const Prim& prim, const TexelRuntime& texel, const Vec3& p0, const Vec3& p1, double tIn,
-                               double tOut, const Vec3& d, const LevelChoice& choice, double scale,
-                               Counters& counters) const {
-        const int k = texel.meshRaysPerAxis(choice.requested);
+                               double tOut, const Vec3& d, double requested, double width, Counters& counters) const {
+        const int k = texel.meshRaysPerAxis(requested);
         if (k <= 1) return traceSourceSegment(prim, texel, p0, p1, tIn, tOut, d, counters);
         const Vec3 axis = (p1 - p0).normalized();
         const Vec3 u = axis.unitOrthogonal(), v = axis.cross(u);
-        const double width = mConeSpread * 0.5 * (tIn + tOut) / scale;
         SpanResult sum{Color::Zero(), 0.0};
         for (int i = 0; i < k; ++i)
             for (int j = 0; j < k; ++j) {

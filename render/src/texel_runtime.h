@@ -59,17 +59,10 @@ struct TexelRuntime {
     }
     /// The mesh's share of a camera span at continuous level `requested` (LevelChoice::requested):
     /// 0 up to the mesh level L, rising linearly to 1 at L + kMeshBlendWidth.
-    double meshWeight(double requested) const {
-        return source ? std::clamp((requested - meshLevel) / kMeshBlendWidth, 0.0, 1.0) : 0.0;
-    }
-    /// The mesh's share of a shadow ray's segment: over a whole level, 0 at L to 1 at L + 1. A
-    /// shadow's volume share is visibility filtered over its voxels; its mesh share, one point of
-    /// it, aliases on the ground at one ray a pixel (on the bush field a shadow blend over half a
-    /// level, like the camera's, raised the RMSE by up to 14 % between 16 and 21 units). Shadow
-    /// rays from the mesh's own hits take the mesh alone (ShadowQueries::tracedShadow).
-    double shadowMeshWeight(double requested) const {
-        return source ? std::clamp(requested - meshLevel, 0.0, 1.0) : 0.0;
-    }
+    double meshWeight(double requested) const { return blendedMesh(requested, kMeshBlendWidth); }
+    /// The mesh's share of a shadow ray's segment, over kShadowMeshBlendWidth. Shadow rays from
+    /// the mesh's own hits take the mesh alone (ShadowQueries::tracedShadow).
+    double shadowMeshWeight(double requested) const { return blendedMesh(requested, kShadowMeshBlendWidth); }
     /// Rays per axis a camera span through the source mesh takes across its footprint
     /// (renderer.cpp, traceSourceSpan): 2 while the footprint is coarser than a voxel of level
     /// L + 1, 1 past it, so that no mesh ray stands for more than a voxel of the first level the
@@ -80,10 +73,20 @@ struct TexelRuntime {
     /// volume at L, whose voxels are up to 1.4 times the footprint there instead of twice, is
     /// marched under half the footprints it was (docs/error-vs-time.md, "The hybrid's band").
     static constexpr double kMeshBlendWidth = 0.5;
+    /// The width of a shadow's blend: a whole level. A shadow's volume share is visibility
+    /// filtered over its voxels; its mesh share, one point of it, aliases on the ground at one ray
+    /// a pixel (on the bush field a shadow blend over half a level, like the camera's, raised the
+    /// RMSE by up to 14 % between 16 and 21 units).
+    static constexpr double kShadowMeshBlendWidth = 1;
+
+private:
+    double blendedMesh(double requested, double width) const {
+        return source ? std::clamp((requested - meshLevel) / width, 0.0, 1.0) : 0.0;
+    }
 };
 
 /// The volume's levels under the hybrid's blend: a footprint that asks for a level in (L, L + 1),
-/// L = `meshLevel`, takes the mesh with weight (λ − L)/0.5 (TexelRuntime::meshWeight) and the volume
+/// L = `meshLevel`, takes the mesh with weight (λ − L)/TexelRuntime::kMeshBlendWidth (meshWeight) and the volume
 /// at level L alone, not L's blend toward L + 1, which the load measured as not faithful (and
 /// which has eight times L's voxels). Other choices are returned as they are; `level` and
 /// `requested` are always kept: they say what the footprint asked for.
