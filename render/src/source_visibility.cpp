@@ -43,7 +43,7 @@ SourceFidelity measureSourceFidelity(const octree::Octree& tree, const ingest::T
     SourceFidelity out{octree::measureChordTransmittance(tree, visible), octree::measureBeamTransmittance(tree, visible), {}, {}, 0};
     const octree::DensityProfile profile(tree);
     while (profile.profiles(out.profiledLevels)) ++out.profiledLevels;
-    const FaithfulLevels faithful = faithfulLevels(out.chords, RenderOptions{}.hybridTolerance);
+    const FaithfulLevels faithful = marchedLevels(faithfulLevels(out.chords, RenderOptions{}.hybridTolerance));
     for (const octree::ShellChordFit& fit :
          octree::fitShellChords(tree, visible, 1, kLevelFitChords, 1, std::uint32_t(faithful.finest)))
         out.fitScale.push_back(fit.scale);

@@ -136,14 +136,17 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             const octree::ChordVisibility visible = [&](const Vec3& a, const Vec3& b) { return !source->occluded(a, b, 0); };
             // One medium for the three measures: they share its dense levels (chord_medium.h).
             const octree::ChordMedium medium(*tree);
-            const FaithfulLevels faithful = measureFaithfulLevels(medium, visible, def.tau, options.hybridTolerance);
+            const FaithfulLevels measured = measureFaithfulLevels(medium, visible, def.tau, options.hybridTolerance);
+            // With the hybrid on, no level finer than kFinestMarchedLevel is marched, by camera
+            // or shadow rays: the mesh is cheaper there (marchedLevels).
+            const FaithfulLevels faithful = options.hybrid ? marchedLevels(measured) : measured;
             t.coarsestShadowLevel = faithful.coarsest;
             // Measured before the fit, the faithful levels keep saying where the volume's
             // chords differ from the mesh's per chord, which a scale per level does not change.
             // kLevelFitChords: on a texel of clustered discs a fit then lets through what the mesh
             // does within 0.003 on other chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
-            // With the hybrid on, no level finer than the mesh level (≤ the finest faithful one)
-            // is marched, by camera or shadow rays (volumeUnderMesh, TexelRuntime::shadowLevelFor).
+            // With the hybrid on, no level finer than the mesh level (≤ `faithful.finest`) is
+            // marched, by camera or shadow rays (volumeUnderMesh, TexelRuntime::shadowLevelFor).
             const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest) : 30u;
             int meshLevel = faithful.finest;
             if (options.fitLevels) {
