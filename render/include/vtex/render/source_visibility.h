@@ -84,9 +84,9 @@ inline constexpr int kLoadChords = 4096;
 /// (mean, mean |error| and 95th percentile); then the same chords through the levels as the
 /// renderer fits them (each level's densities times `fitScale`, fitted over kLevelFitChords shell
 /// chords at τ = 1), which is what a render with `--level-fit on` marches: the levels up to the
-/// faithful levels' finest + 1 at the renderer's default tolerance (finer ones the hybrid never
-/// marches, and the fit's four times as many chords, each up to 5.8 shell heights long, would
-/// walk the finest levels, which hold nearly all the voxels).
+/// finest the hybrid marches, marchedLevels of the faithful levels at the renderer's default
+/// tolerance (finer ones it never marches, and the fit's four times as many chords, each up to
+/// 5.8 shell heights long, would walk the finest levels, which hold nearly all the voxels).
 struct SourceFidelity {
     std::vector<octree::ChordTransmittance> chords;
     std::vector<octree::BeamError> beams;
