@@ -158,6 +158,7 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             }
             if (options.hybrid) {
                 t.meshLevel = meshLevel;
+                t.faithfulFinest = measured.finest;
                 t.source = std::move(source);
             } else {
                 t.sourceMesh.reset();

@@ -63,12 +63,19 @@ struct TexelRuntime {
     /// The mesh's share of a shadow ray's segment, over kShadowMeshBlendWidth. Shadow rays from
     /// the mesh's own hits take the mesh alone (ShadowQueries::tracedShadow).
     double shadowMeshWeight(double requested) const { return blendedMesh(requested, kShadowMeshBlendWidth); }
+    /// The finest level the load measured as faithful, before kFinestMarchedLevel capped the
+    /// mesh level (−1: none measured).
+    int faithfulFinest = -1;
     /// Rays per axis a camera span through the source mesh takes across its footprint
     /// (renderer.cpp, traceSourceSpan): 2 while the footprint is coarser than a voxel of level
-    /// L + 1, 1 past it, so that no mesh ray stands for more than a voxel of the first level the
-    /// load measured as not faithful. One ray a pixel there aliases the leaves the volume at L
-    /// would have averaged (docs/render.md, "Mesh where the volume is not faithful").
-    int meshRaysPerAxis(double requested) const { return requested < meshLevel + 1 ? 2 : 1; }
+    /// F + 1, F the finest faithful level (or L if finer), 1 past it, so that no mesh ray stands
+    /// for more than a voxel of the first level the load measured as not faithful. One ray a pixel
+    /// there aliases what the volume would have averaged: the leaves of the volume at L, or, where
+    /// the cap keeps faithful levels past L unmarched, the hairs and bars they resolve (docs/render.md,
+    /// "Mesh where the volume is not faithful").
+    int meshRaysPerAxis(double requested) const {
+        return requested < std::max(meshLevel, double(faithfulFinest)) + 1 ? 2 : 1;
+    }
     /// The width of the camera's blend, in levels: over [L, L + 0.5] rather than a whole level, the
     /// volume at L, whose voxels are up to 1.4 times the footprint there instead of twice, is
     /// marched under half the footprints it was (docs/error-vs-time.md, "The hybrid's band").
