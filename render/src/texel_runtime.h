@@ -28,6 +28,10 @@ struct TexelRuntime {
     std::shared_ptr<const ingest::TriangleMesh> sourceMesh;
     std::unique_ptr<const detail::SourceBvh> source;
     double meshLevel = std::numeric_limits<double>::infinity();
+    /// The finest level the load measured as faithful, before kFinestMarchedLevel capped the
+    /// levels the hybrid marches: never below the mesh level, which is chosen among the capped
+    /// faithful levels (−1 without a source or with the hybrid off).
+    int faithfulFinest = -1;
     /// Shadow marches never take a level coarser than this: the coarsest level whose chord
     /// transmittance is within the hybrid's tolerance of the mesh's (0 without a source). A
     /// shadow needs no antialiasing, and coarser levels are measurably too opaque.
@@ -63,19 +67,14 @@ struct TexelRuntime {
     /// The mesh's share of a shadow ray's segment, over kShadowMeshBlendWidth. Shadow rays from
     /// the mesh's own hits take the mesh alone (ShadowQueries::tracedShadow).
     double shadowMeshWeight(double requested) const { return blendedMesh(requested, kShadowMeshBlendWidth); }
-    /// The finest level the load measured as faithful, before kFinestMarchedLevel capped the
-    /// mesh level (−1: none measured).
-    int faithfulFinest = -1;
     /// Rays per axis a camera span through the source mesh takes across its footprint
     /// (renderer.cpp, traceSourceSpan): 2 while the footprint is coarser than a voxel of level
-    /// F + 1, F the finest faithful level (or L if finer), 1 past it, so that no mesh ray stands
-    /// for more than a voxel of the first level the load measured as not faithful. One ray a pixel
-    /// there aliases what the volume would have averaged: the leaves of the volume at L, or, where
-    /// the cap keeps faithful levels past L unmarched, the hairs and bars they resolve (docs/render.md,
-    /// "Mesh where the volume is not faithful").
-    int meshRaysPerAxis(double requested) const {
-        return requested < std::max(meshLevel, double(faithfulFinest)) + 1 ? 2 : 1;
-    }
+    /// faithfulFinest + 1, 1 past it, so that no mesh ray stands for more than a voxel of the
+    /// first level the load measured as not faithful. One ray a pixel there aliases what the
+    /// volume would have averaged: the leaves of the volume at L, or, where the cap keeps faithful
+    /// levels past L unmarched, the hairs and bars they resolve (docs/render.md, "Mesh where the
+    /// volume is not faithful").
+    int meshRaysPerAxis(double requested) const { return requested < faithfulFinest + 1 ? 2 : 1; }
     /// The width of the camera's blend, in levels: over [L, L + 0.5] rather than a whole level, the
     /// volume at L, whose voxels are up to 1.4 times the footprint there instead of twice, is
     /// marched under half the footprints it was (docs/error-vs-time.md, "The hybrid's band").
