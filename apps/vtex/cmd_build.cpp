@@ -9,6 +9,7 @@
 #include <vtex/core/memory_budget.h>
 #include <vtex/ingest/ingest.h>
 #include <vtex/octree/octree.h>
+#include <vtex/render/renderer.h>
 #include <vtex/render/source_visibility.h>
 
 #include <chrono>
@@ -106,6 +107,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         std::uint64_t maxMemory = 0;
         int threads = 0;
         std::string source;
+        double tau = 1;
         std::string update;
         std::string region;
     };
@@ -131,7 +133,15 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     addThreadsOption(app, flags->threads);
     app.add_option("--source", flags->source,
                    "The mesh the volume was sampled from: report each level's transmittance against it along "
-                   "chords of the texel and over beams of the level (as vtex inspect --source)");
+                   "chords of the texel and over beams of the level (as vtex inspect --source), and store in the "
+                   "octree what a render measures against it at load, so that renders with this source take it "
+                   "instead of measuring (stats.json: source_measures)");
+    app.add_option("--tau", flags->tau,
+                   "With --source: the scene's texel tau the stored measures are for (a render with another tau "
+                   "measures at load)")
+        ->check(finiteNumber())
+        ->capture_default_str()
+        ->check(CLI::Range(1e-6, 1e6));
     auto* update = app.add_option("--update", flags->update,
                                   "Earlier octree (.vto) of this volume before an edit inside --region: filter again only "
                                   "the region's ancestors (the same options; an octree that merged nodes, or a solid "
@@ -159,7 +169,14 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         options.filterErrorSamples = flags->filterErrorSamples;
         TerminalProgress progress(global);
         std::string how;
-        const octree::Octree tree = buildOrUpdate(std::move(volume), options, flags->update, flags->region, progress, how);
+        octree::Octree tree = buildOrUpdate(std::move(volume), options, flags->update, flags->region, progress, how);
+        // What a render with the default options measures of the texel against the source at
+        // load (render::measureSource), stored in the file: a tree built or updated here never
+        // carries an earlier tree's measures, which were of other levels.
+        if (source) {
+            tree.measures = render::measureSource(tree, *source, flags->tau, render::RenderOptions{}.hybridTolerance);
+            how += ", source measures stored";
+        }
         octree::writeVto(tree, flags->output);
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         char line[1024];

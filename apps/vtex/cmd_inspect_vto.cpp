@@ -52,23 +52,32 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                                                 {"max", jsonNumber(s.filterErrorMax)},
                                                 {"samples", s.filterErrorSamples}}}});
         }
-        const nlohmann::json j = {{"file", file.string()},
-                                  {"kind", "vto"},
-                                  {"version", check.version},
-                                  {"resolution", tree.resolution()},
-                                  {"levels", tree.levelCount()},
-                                  {"cyclic", info.source.cyclic},
-                                  {"filter", std::string(octree::filterRuleName(info.rule))},
-                                  {"tolerance", jsonNumber(info.tolerance)},
-                                  {"stored_nodes", tree.storedNodes()},
-                                  {"compression", jsonNumber(tree.compression())},
-                                  {"source_triangles", info.source.sourceTriangles},
-                                  {"source_area", jsonNumber(info.source.sourceArea)},
-                                  {"fit_error", {{"mean", jsonNumber(info.source.fitError.mean)},
-                                                 {"max", jsonNumber(info.source.fitError.max)},
-                                                 {"samples", info.source.fitError.samples}}},
-                                  {"per_level", levels},
-                                  {"checksums", checksumsJson(check)}};
+        nlohmann::json j = {{"file", file.string()},
+                            {"kind", "vto"},
+                            {"version", check.version},
+                            {"resolution", tree.resolution()},
+                            {"levels", tree.levelCount()},
+                            {"cyclic", info.source.cyclic},
+                            {"filter", std::string(octree::filterRuleName(info.rule))},
+                            {"tolerance", jsonNumber(info.tolerance)},
+                            {"stored_nodes", tree.storedNodes()},
+                            {"compression", jsonNumber(tree.compression())},
+                            {"source_triangles", info.source.sourceTriangles},
+                            {"source_area", jsonNumber(info.source.sourceArea)},
+                            {"fit_error", {{"mean", jsonNumber(info.source.fitError.mean)},
+                                           {"max", jsonNumber(info.source.fitError.max)},
+                                           {"samples", info.source.fitError.samples}}},
+                            {"per_level", levels},
+                            {"checksums", checksumsJson(check)}};
+        if (tree.measures) {
+            const octree::SourceMeasures& m = *tree.measures;
+            j["source_measures"] = {{"tau", jsonNumber(m.tau)},
+                                    {"tolerance", jsonNumber(m.tolerance)},
+                                    {"faithful_levels", {m.faithfulCoarsest, m.faithfulFinest}},
+                                    {"mesh_level", m.meshLevel},
+                                    {"level_scales", m.levelScales},
+                                    {"shadow_levels", m.shadowLevels}};
+        }
         out << j.dump() << '\n';
         return;
     }
@@ -92,6 +101,16 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                       (unsigned long long)s.storedNodes, (unsigned long long)s.occupiedNodes, s.meanDensity,
                       s.meanOccupiedDensity, s.filterErrorMean, s.filterErrorMax,
                       (unsigned long long)s.filterErrorSamples);
+        out << line;
+    }
+    if (tree.measures) {
+        // What `vtex build --source` stored for renders (render::measureSource).
+        const octree::SourceMeasures& m = *tree.measures;
+        std::snprintf(line, sizeof line,
+                      "source measures (vtex build --source, for tau %g, tolerance %g): faithful levels %d-%d, mesh "
+                      "level %d, %zu level scales, %zu shadow levels\n",
+                      m.tau, m.tolerance, int(m.faithfulCoarsest), int(m.faithfulFinest), int(m.meshLevel),
+                      m.levelScales.size(), m.shadowLevels.size());
         out << line;
     }
     printFidelity(measures, options.source, out);

@@ -33,6 +33,7 @@ Octree& Octree::operator=(const Octree& other) {
     info = other.info;
     levels = other.levels;
     stats = other.stats;
+    measures = other.measures;
     mBytesRead = other.bytesRead();
     mLoader.reset();
     return *this;
@@ -46,6 +47,7 @@ Octree& Octree::operator=(Octree&& other) {
     info = std::move(other.info);
     levels = std::move(other.levels);
     stats = std::move(other.stats);
+    measures = std::move(other.measures);
     mBytesRead = other.bytesRead();
     mLoader.reset();
     other.mLoader.reset();
@@ -56,7 +58,7 @@ Octree& Octree::operator=(Octree&& other) {
 bool operator==(const Octree& a, const Octree& b) {
     a.loadLevels(kAllLevels);
     b.loadLevels(kAllLevels);
-    return a.info == b.info && a.levels == b.levels && a.stats == b.stats;
+    return a.info == b.info && a.levels == b.levels && a.stats == b.stats && a.measures == b.measures;
 }
 
 void Octree::loadLevels(std::uint32_t level) const {
@@ -154,7 +156,9 @@ std::vector<detail::OutSection> vtoHeadAndStats(const Octree& octree) {
         stats.f64(s.filterErrorMax);
         stats.u64(s.filterErrorSamples);
     }
-    return {{"HEAD", std::move(head.str())}, {"STAT", std::move(stats.str())}};
+    std::vector<detail::OutSection> out{{"HEAD", std::move(head.str())}, {"STAT", std::move(stats.str())}};
+    if (octree.measures) out.push_back({"MEAS", detail::measuresBytes(*octree.measures)});
+    return out;
 }
 
 // The container's sections of `octree`, whole in memory.
@@ -207,6 +211,8 @@ Octree parseVto(std::string_view bytes, const std::filesystem::path& file) {
     Octree tree;
     parseVtoHead(requireSection(sections, "HEAD", file), tree, file);
     parseVtoStats(requireSection(sections, "STAT", file), tree, file);
+    for (const InSection& section : sections)
+        if (section.tag == "MEAS") tree.measures = parseVtoMeasures(section.payload, tree, file);
     const std::uint32_t levelCount = tree.info.source.levels + 1;
     tree.levels.resize(levelCount);
     std::uint64_t expected = 1;  // nodes the level above announces

@@ -33,7 +33,7 @@ std::string levelTag(std::uint32_t l) {
 }
 
 bool isVtoSection(std::string_view tag) {
-    return tag == "HEAD" || tag == "STAT" ||
+    return tag == "HEAD" || tag == "STAT" || tag == "MEAS" ||
            (tag.size() == 4 && tag.substr(0, 2) == "LV" && std::isdigit(static_cast<unsigned char>(tag[2])) &&
             std::isdigit(static_cast<unsigned char>(tag[3])));
 }
@@ -71,6 +71,53 @@ void parseVtoStats(std::string_view payload, Octree& tree, const std::filesystem
             !std::isfinite(s.filterErrorMax))
             throw InputError(file, "non-finite statistic", sectionLocation("STAT"));
     }
+}
+
+std::string measuresBytes(const SourceMeasures& m) {
+    ByteWriter w;
+    w.u32(m.version);
+    w.u64(m.geometryHash);
+    w.f64(m.tau);
+    w.f64(m.tolerance);
+    w.u32(std::uint32_t(m.faithfulCoarsest));
+    w.u32(std::uint32_t(m.faithfulFinest));
+    w.u32(std::uint32_t(m.meshLevel));
+    w.u32(std::uint32_t(m.levelScales.size()));
+    for (const double s : m.levelScales) w.f64(s);
+    w.u32(std::uint32_t(m.shadowLevels.size()));
+    for (const std::int32_t l : m.shadowLevels) w.u32(std::uint32_t(l));
+    return std::move(w.str());
+}
+
+SourceMeasures parseVtoMeasures(std::string_view payload, const Octree& tree, const std::filesystem::path& file) {
+    const std::string where = sectionLocation("MEAS");
+    const std::uint32_t levelCount = tree.info.source.levels + 1;
+    ByteReader r(payload);
+    SourceMeasures m;
+    m.version = r.u32();
+    m.geometryHash = r.u64();
+    m.tau = r.f64();
+    m.tolerance = r.f64();
+    m.faithfulCoarsest = std::int32_t(r.u32());
+    m.faithfulFinest = std::int32_t(r.u32());
+    m.meshLevel = std::int32_t(r.u32());
+    // Counts are checked before anything is allocated for them: at most one entry per level.
+    const std::uint32_t scales = r.u32();
+    if (!r.ok() || scales > levelCount) throw InputError(file, "wrong size", where);
+    for (std::uint32_t i = 0; i < scales; ++i) m.levelScales.push_back(r.f64());
+    const std::uint32_t shadows = r.u32();
+    if (!r.ok() || shadows > levelCount) throw InputError(file, "wrong size", where);
+    for (std::uint32_t i = 0; i < shadows; ++i) m.shadowLevels.push_back(std::int32_t(r.u32()));
+    if (!r.ok() || r.remaining() != 0) throw InputError(file, "wrong size", where);
+    const auto level = [&](std::int32_t l) { return l >= 0 && std::uint32_t(l) < levelCount; };
+    if (!(m.tau > 0) || !std::isfinite(m.tau) || !(m.tolerance >= 0) || !std::isfinite(m.tolerance))
+        throw InputError(file, "invalid tau or tolerance", where);
+    if (!level(m.faithfulCoarsest) || !level(m.faithfulFinest) || !level(m.meshLevel) ||
+        !std::all_of(m.shadowLevels.begin(), m.shadowLevels.end(), level))
+        throw InputError(file, "a level beyond the tree's " + std::to_string(levelCount), where);
+    if (!std::all_of(m.levelScales.begin(), m.levelScales.end(), [](double s) { return s > 0 && std::isfinite(s); }))
+        throw InputError(file, "a level scale that is not positive and finite", where);
+    return m;
 }
 
 std::uint64_t parseVtoLevel(std::string_view payload, std::uint32_t l, std::uint64_t expected, const Octree& tree,
@@ -234,6 +281,11 @@ std::shared_ptr<const Octree> openVto(const std::filesystem::path& file) {
         if (tag == std::string_view("HEAD")) parseVtoHead(payload, *tree, file);
         else parseVtoStats(payload, *tree, file);
     }
+    for (const TableEntry& entry : entries)
+        if (entry.tag == "MEAS") {
+            tree->measures = parseVtoMeasures(readSection(fd, entry, file), *tree, file);
+            bytesRead += entry.size;
+        }
     const std::uint32_t levelCount = tree->info.source.levels + 1;
     std::vector<TableEntry> levels;
     for (std::uint32_t l = 0; l < levelCount; ++l) levels.push_back(requireEntry(entries, levelTag(l), file));

@@ -22,13 +22,19 @@ inline constexpr std::string_view kVtoMagic{"VTEX.VTO", 8};
 
 /// "LV00" … "LV99".
 std::string levelTag(std::uint32_t level);
-/// HEAD, STAT or LVnn.
+/// HEAD, STAT, MEAS or LVnn.
 bool isVtoSection(std::string_view tag);
 
 /// HEAD into tree.info, STAT into tree.stats (sized to the level count HEAD gives). Throw
 /// vtex::InputError naming `file` and the section.
 void parseVtoHead(std::string_view payload, Octree& tree, const std::filesystem::path& file);
 void parseVtoStats(std::string_view payload, Octree& tree, const std::filesystem::path& file);
+
+/// The MEAS section (docs/formats.md): its payload for `m`, and `m` from a payload, checked
+/// against the tree's level count (HEAD parsed first). Throws vtex::InputError naming `file`
+/// and the section.
+std::string measuresBytes(const SourceMeasures& m);
+SourceMeasures parseVtoMeasures(std::string_view payload, const Octree& tree, const std::filesystem::path& file);
 
 /// Level `level`'s section into `nodes`, checked against tree.stats and against `expected`, the
 /// number of children the level above announces (1 for the root). Returns the number of

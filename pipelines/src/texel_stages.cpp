@@ -5,6 +5,7 @@
 #include <vtex/ingest/ingest.h>
 #include <vtex/octree/octree.h>
 #include <vtex/octree/volume.h>
+#include <vtex/render/renderer.h>
 #include <vtex/render/source_visibility.h>
 #include <vtex/sampler/patterns.h>
 #include <vtex/sampler/sampler.h>
@@ -141,10 +142,14 @@ Json BuildWork::run(const std::vector<Stage>& stages, const Stage& self) const {
     o.tolerance = mTolerance;
     // In full after a partial re-sampling too: resuming the earlier octree costs more than a
     // full build (docs/formats.md, "Re-sampling a region").
-    const octree::Octree tree = octree::buildOctree(std::move(volume), o, *self.progress);
+    octree::Octree tree = octree::buildOctree(std::move(volume), o, *self.progress);
+    // What the pipeline's renders (τ 1, default options) measure of the texel against its
+    // source at load, stored in the octree as `vtex build --source` does (render::measureSource).
+    const ingest::TriangleMesh source = ingest::loadMesh(sourceFile);
+    tree.measures = render::measureSource(tree, source, 1.0, render::RenderOptions{}.hybridTolerance);
     octree::writeVto(tree, self.outputs.at("octree"));
     // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
-    const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, ingest::loadMesh(sourceFile));
+    const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, source);
     Json levels = Json::array();
     for (std::uint32_t l = 0; l < tree.levelCount(); ++l)
         levels.push_back({{"level", l},

@@ -384,6 +384,9 @@ RenderResult renderSceneInArena(const Scene& scene, const RenderOptions& options
         result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
         result.stats.levelScales.push_back(t.levelScale);
         result.stats.shadowLevels.push_back(t.shadowLevels);
+        const TexelDef& def = scene.texels[i];
+        const bool sourced = def.sourceData || !def.source.empty();
+        result.stats.sourceMeasures.push_back(t.measuresStored ? "stored" : sourced ? "measured" : "none");
         detail::countVtoBytes(scene.texels[i], t.volume->tree(), result.stats);
     }
     result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
@@ -442,6 +445,7 @@ std::string formatStatsJson(const RenderStats& s) {
         j["mesh_levels"] = s.meshLevels;
         j["level_scales"] = s.levelScales;
         j["shadow_levels"] = s.shadowLevels;
+        j["source_measures"] = s.sourceMeasures;
         j["approximations"] = s.approximations;
     }
     if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;

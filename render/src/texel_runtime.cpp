@@ -8,9 +8,13 @@
 #include "footprint.h"
 #include "near_shadow_table.h"
 
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <string>
 
 namespace vtex::render::detail {
 namespace {
@@ -114,6 +118,53 @@ MeasuredLighting measureLighting(const octree::ChordMedium& medium, const Source
     return out;
 }
 
+// Everything a texel's load measures against its source (measureSource), with the render's
+// options: the faithful levels as measured (uncapped), then with the hybrid on no level finer
+// than kFinestMarchedLevel is fitted or lit, nor taken as the mesh level (marchedLevels).
+octree::SourceMeasures measureWith(const octree::Octree& tree, const SourceBvh& source, double tau, double tolerance,
+                                   bool hybrid, bool fitLevels) {
+    const octree::ChordVisibility visible = [&](const Vec3& a, const Vec3& b) { return !source.occluded(a, b, 0); };
+    // One medium for the three measures: they share its dense levels (chord_medium.h).
+    const octree::ChordMedium medium(tree);
+    const FaithfulLevels measured = measureFaithfulLevels(medium, visible, tau, tolerance);
+    const FaithfulLevels faithful = hybrid ? marchedLevels(measured) : measured;
+    octree::SourceMeasures m;
+    m.version = sourceMeasuresVersion();
+    m.tau = tau;
+    m.tolerance = tolerance;
+    m.faithfulCoarsest = measured.coarsest;
+    m.faithfulFinest = measured.finest;
+    m.meshLevel = faithful.finest;
+    if (fitLevels) {
+        // Measured before the fit, the faithful levels keep saying where the volume's chords
+        // differ from the mesh's per chord, which a scale per level does not change.
+        // kLevelFitChords: on a texel of clustered discs a fit then lets through what the mesh
+        // does within 0.003 on other chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
+        // With the hybrid on, no level finer than the mesh level (≤ `faithful.finest`) is
+        // marched, by camera or shadow rays (volumeUnderMesh, TexelRuntime::shadowLevelFor).
+        const std::uint32_t finest = hybrid ? std::uint32_t(faithful.finest) : 30u;
+        for (const octree::ShellChordFit& fit : octree::fitShellChords(medium, visible, tau, kLevelFitChords, 1, finest))
+            m.levelScales.push_back(fit.scale);
+        const MeasuredLighting lighting = measureLighting(medium, source, visible, tau, m.levelScales, faithful);
+        m.shadowLevels.assign(lighting.shadowLevels.begin(), lighting.shadowLevels.end());
+        m.meshLevel = lighting.meshLevel;
+    }
+    return m;
+}
+
+// The runtime's levels from the measures: shadows keep to the coarsest faithful level, the
+// hybrid traces the mesh past the mesh level.
+void applyMeasures(TexelRuntime& t, const octree::SourceMeasures& m, bool hybrid) {
+    const FaithfulLevels measured{m.faithfulCoarsest, m.faithfulFinest};
+    t.coarsestShadowLevel = (hybrid ? marchedLevels(measured) : measured).coarsest;
+    t.levelScale = m.levelScales;
+    t.shadowLevels.assign(m.shadowLevels.begin(), m.shadowLevels.end());
+    if (hybrid) {
+        t.meshLevel = m.meshLevel;
+        t.faithfulFinest = m.faithfulFinest;
+    }
+}
+
 }  // namespace
 
 std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options) {
@@ -129,40 +180,25 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
         t.tau = def.tau;
         t.material = def.material;
         // With a source, the levels the volume is faithful at are measured (one pass of chords):
-        // shadows keep to them, and the hybrid traces the mesh past the finest of them.
+        // shadows keep to them, and the hybrid traces the mesh past the finest of them. What
+        // `vtex build --source` stored in the texel is taken instead when it was measured for
+        // this source, τ and tolerance with the default options (measuresApply): then the load
+        // reads none of the levels the measure would have (a texel faithful to its finest
+        // level: all of them).
         if (def.sourceData || !def.source.empty()) {
             t.sourceMesh = loadTexelSource(scene, index);
             auto source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
-            const octree::ChordVisibility visible = [&](const Vec3& a, const Vec3& b) { return !source->occluded(a, b, 0); };
-            // One medium for the three measures: they share its dense levels (chord_medium.h).
-            const octree::ChordMedium medium(*tree);
-            const FaithfulLevels measured = measureFaithfulLevels(medium, visible, def.tau, options.hybridTolerance);
-            // With the hybrid on, no level finer than kFinestMarchedLevel is marched, by camera
-            // or shadow rays: the mesh is cheaper there (marchedLevels).
-            const FaithfulLevels faithful = options.hybrid ? marchedLevels(measured) : measured;
-            t.coarsestShadowLevel = faithful.coarsest;
-            // Measured before the fit, the faithful levels keep saying where the volume's
-            // chords differ from the mesh's per chord, which a scale per level does not change.
-            // kLevelFitChords: on a texel of clustered discs a fit then lets through what the mesh
-            // does within 0.003 on other chords (ShellChords.AFittedLevelLetsThroughWhatTheMeshDoesOnOtherChords).
-            // With the hybrid on, no level finer than the mesh level (≤ `faithful.finest`) is
-            // marched, by camera or shadow rays (volumeUnderMesh, TexelRuntime::shadowLevelFor).
-            const std::uint32_t finest = options.hybrid ? std::uint32_t(faithful.finest) : 30u;
-            int meshLevel = faithful.finest;
-            if (options.fitLevels) {
-                for (const octree::ShellChordFit& fit : octree::fitShellChords(medium, visible, def.tau, kLevelFitChords, 1, finest))
-                    t.levelScale.push_back(fit.scale);
-                MeasuredLighting lighting = measureLighting(medium, *source, visible, def.tau, t.levelScale, faithful);
-                t.shadowLevels = std::move(lighting.shadowLevels);
-                meshLevel = lighting.meshLevel;
-            }
-            if (options.hybrid) {
-                t.meshLevel = meshLevel;
-                t.faithfulFinest = measured.finest;
-                t.source = std::move(source);
-            } else {
-                t.sourceMesh.reset();
-            }
+            const bool defaults = options.hybrid && options.fitLevels;
+            t.measuresStored = defaults && tree->measures &&
+                               measuresApply(*tree->measures, sourceGeometryHash(*t.sourceMesh), def.tau,
+                                             options.hybridTolerance);
+            applyMeasures(t,
+                          t.measuresStored ? *tree->measures
+                                           : measureWith(*tree, *source, def.tau, options.hybridTolerance,
+                                                         options.hybrid, options.fitLevels),
+                          options.hybrid);
+            if (options.hybrid) t.source = std::move(source);
+            else t.sourceMesh.reset();
         }
         t.volume = std::make_unique<const MarchVolume>(std::move(tree));
     }
@@ -170,3 +206,42 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
 }
 
 }  // namespace vtex::render::detail
+
+namespace vtex::render {
+
+std::uint32_t sourceMeasuresVersion() {
+    // The rules' revision (raise it when what measureWith measures changes otherwise), then the
+    // constants the measures depend on: a record from another build of them is measured again.
+    constexpr int kRevision = 1;
+    const std::string recipe = std::to_string(kRevision) + " " + std::to_string(kLoadChords) + " " +
+                               std::to_string(kLevelFitChords) + " " + std::to_string(kFinestMarchedLevel) + " " +
+                               std::to_string(detail::NearShadowTable::kMaxLevel);
+    return std::uint32_t(XXH3_64bits(recipe.data(), recipe.size()));
+}
+
+std::uint64_t sourceGeometryHash(const ingest::TriangleMesh& mesh) {
+    XXH3_state_t state;
+    XXH3_INITSTATE(&state);
+    XXH3_64bits_reset(&state);
+    const std::uint64_t counts[2] = {mesh.positions.size(), mesh.triangles.size()};
+    XXH3_64bits_update(&state, counts, sizeof counts);
+    for (const Eigen::Vector3f& p : mesh.positions) XXH3_64bits_update(&state, p.data(), 3 * sizeof(float));
+    XXH3_64bits_update(&state, mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
+    return XXH3_64bits_digest(&state);
+}
+
+octree::SourceMeasures measureSource(const octree::Octree& tree, const ingest::TriangleMesh& source, double tau,
+                                     double tolerance) {
+    const detail::SourceBvh bvh(source, tree.info.source);
+    octree::SourceMeasures m = detail::measureWith(tree, bvh, tau, tolerance, true, true);
+    m.geometryHash = sourceGeometryHash(source);
+    return m;
+}
+
+bool measuresApply(const octree::SourceMeasures& stored, std::uint64_t geometryHash, double tau, double tolerance) {
+    return stored.version == sourceMeasuresVersion() && stored.geometryHash == geometryHash && stored.tau == tau &&
+           stored.tolerance == tolerance;
+}
+
+}  // namespace vtex::render
+

@@ -36,6 +36,9 @@ struct TexelRuntime {
     /// transmittance is within the hybrid's tolerance of the mesh's (0 without a source). A
     /// shadow needs no antialiasing, and coarser levels are measurably too opaque.
     int coarsestShadowLevel = 0;
+    /// The levels above came from what `vtex build --source` stored in the texel (the .vto's
+    /// MEAS section), not from measuring at load (stats.json's `source_measures`).
+    bool measuresStored = false;
     /// With the levels fitted, the shadow level per footprint level below coarsestShadowLevel:
     /// measured, between the footprint's and coarsestShadowLevel (texel_runtime.cpp,
     /// shadowLevelsFrom). Empty, or a footprint past its end: max(coarsestShadowLevel, footprint).

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <limits>
 #include <random>
 
 namespace vtex::octree {
@@ -152,6 +153,91 @@ TEST(VtoFormat, ConsistentButWrongContentIsRefused) {
     SparseVolume v = smallVolume();
     std::swap(v.blocks[0], v.blocks[1]);  // out of order
     EXPECT_THROW(parseVtl(serializeVtl(v), "bad.vtl"), InputError);
+}
+
+// What `vtex build --source` stores for renders (the MEAS section): a tree with a record.
+SourceMeasures sampleMeasures() {
+    SourceMeasures m;
+    m.version = 0x1234abcd;
+    m.geometryHash = 0xfedcba9876543210ull;
+    m.tau = 1.5;
+    m.tolerance = 0.02;
+    m.faithfulCoarsest = 1;
+    m.faithfulFinest = 3;
+    m.meshLevel = 2;
+    m.levelScales = {0.72, 0.81, 0.93};
+    m.shadowLevels = {1};
+    return m;
+}
+
+// The record goes through the file bit for bit, whole (readVto) and opened a level at a time
+// (openVto), every bit flip of it is refused, and a tree without one writes what it did before.
+TEST(VtoFormat, StoredSourceMeasuresRoundTrip) {
+    Octree tree = smallOctree();
+    const std::string without = serializeVto(tree);
+    tree.measures = sampleMeasures();
+    const std::string bytes = serializeVto(tree);
+    EXPECT_GT(bytes.size(), without.size());
+    const Octree back = parseVto(bytes, "mem.vto");
+    ASSERT_TRUE(back.measures);
+    EXPECT_EQ(*back.measures, sampleMeasures());
+    EXPECT_EQ(serializeVto(back), bytes);
+    const auto path = std::filesystem::path(VTEX_TEST_TMP) / "measured.vto";
+    std::filesystem::create_directories(path.parent_path());
+    writeVto(tree, path);
+    EXPECT_TRUE(readFileBytes(path) == bytes);
+    const auto opened = openVto(path);
+    ASSERT_TRUE(opened->measures);
+    EXPECT_EQ(*opened->measures, sampleMeasures());
+    EXPECT_FALSE(parseVto(without, "mem.vto").measures);
+    expectAllCorruptionRefused(bytes, [](const std::string& b) { parseVto(b, "t.vto"); });
+}
+
+// Checksummed but impossible records are refused naming the section, by both readers.
+TEST(VtoFormat, ImpossibleSourceMeasuresAreRefused) {
+    const auto refusal = [](const SourceMeasures& m) {
+        Octree tree = smallOctree();
+        tree.measures = m;
+        try {
+            parseVto(serializeVto(tree), "bad.vto");
+        } catch (const InputError& e) {
+            return std::string(e.location()) + ": " + e.what();
+        }
+        return std::string("accepted");
+    };
+    const auto refusedAtMeas = [&](const SourceMeasures& m) { return refusal(m).find("section 'MEAS'") == 0; };
+    SourceMeasures m = sampleMeasures();
+    m.meshLevel = 4;  // the tree has levels 0–3
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    m = sampleMeasures();
+    m.shadowLevels = {-1};
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    m = sampleMeasures();
+    m.levelScales[1] = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    m = sampleMeasures();
+    m.levelScales.assign(5, 1.0);  // more scales than levels
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    m = sampleMeasures();
+    m.tau = 0;
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    m = sampleMeasures();
+    m.tolerance = -1;
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    EXPECT_EQ(refusal(sampleMeasures()), "accepted");
+    // openVto checks the record when it opens the file, before any level.
+    Octree tree = smallOctree();
+    tree.measures = sampleMeasures();
+    tree.measures->faithfulFinest = 9;
+    const auto path = std::filesystem::path(VTEX_TEST_TMP) / "bad_measures.vto";
+    std::filesystem::create_directories(path.parent_path());
+    writeVto(tree, path);
+    try {
+        openVto(path);
+        FAIL();
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.location(), "section 'MEAS'");
+    }
 }
 
 }  // namespace

@@ -332,6 +332,12 @@ TEST(Pipeline, ReferenceRendersPutTexelRendersOnAnErrorAgainstTimeTable) {
     const auto statsTruth = nlohmann::json::parse(vtex::test::readText(dir / "out/renders/truth.stats.json"));
     EXPECT_EQ(statsTruth["renderer"], "reference-embedded");
     EXPECT_EQ(statsTruth["spp"], 64);
+    // The build stage stored what a texel render with the default options measures of its source
+    // (docs/pipelines.md); cross-hill, without the hybrid, measures its own.
+    const auto statsGrass = nlohmann::json::parse(vtex::test::readText(dir / "out/renders/grass-hill.stats.json"));
+    EXPECT_EQ(statsGrass["source_measures"], nlohmann::json::array({"stored"})) << statsGrass.dump();
+    const auto statsCross = nlohmann::json::parse(vtex::test::readText(dir / "out/renders/cross-hill.stats.json"));
+    EXPECT_EQ(statsCross["source_measures"], nlohmann::json::array({"measured"}));
 }
 
 TEST(Pipeline, AFileWithAnErrorIsRefusedBeforeAnythingRuns) {

@@ -64,6 +64,24 @@ struct OctreeInfo {
     friend bool operator==(const OctreeInfo&, const OctreeInfo&) = default;
 };
 
+/// What a render measures of a texel against its source mesh when it loads the texel (the
+/// faithful levels, each level's density scale, the shadow levels, the hybrid's mesh level;
+/// docs/render.md, "Mesh where the volume is not faithful" and "Levels fitted to the source"),
+/// measured once by `vtex build --source` and kept in the .vto's MEAS section (docs/formats.md).
+/// The octree only stores and checks it; render::measureSource makes it and a render takes it
+/// in place of measuring when version, geometry, τ and tolerance are what it would measure with.
+struct SourceMeasures {
+    std::uint32_t version = 0;       ///< the measuring code's version (render::sourceMeasuresVersion)
+    std::uint64_t geometryHash = 0;  ///< of the source mesh (render::sourceGeometryHash)
+    double tau = 0;                  ///< the texel's τ measured with
+    double tolerance = 0;            ///< the hybrid's chord tolerance measured with
+    std::int32_t faithfulCoarsest = 0, faithfulFinest = 0;  ///< as measured, before any cap
+    std::int32_t meshLevel = 0;                             ///< the hybrid's mesh level
+    std::vector<double> levelScales;         ///< one per level fitted, from level 0
+    std::vector<std::int32_t> shadowLevels;  ///< one per footprint level below the coarsest shadow level
+    friend bool operator==(const SourceMeasures&, const SourceMeasures&) = default;
+};
+
 class Octree {
 public:
     OctreeInfo info;
@@ -73,6 +91,9 @@ public:
     /// levels[0 … ℓ] or find(ℓ, …).
     std::vector<std::vector<OctreeNode>> levels;
     std::vector<LevelStats> stats;  ///< one per level
+    /// The render's measures against the source, when `vtex build --source` stored them. A tree
+    /// built or updated in memory has none until they are measured for it.
+    std::optional<SourceMeasures> measures;
 
     Octree();
     ~Octree();
@@ -82,7 +103,7 @@ public:
     Octree(Octree&& other);
     Octree& operator=(const Octree& other);
     Octree& operator=(Octree&& other);
-    /// Same info, levels and statistics (every level loaded first).
+    /// Same info, levels, statistics and measures (every level loaded first).
     friend bool operator==(const Octree& a, const Octree& b);
 
     /// Levels 0 … min(level, deepest) in memory: a tree opened with openVto reads and checks

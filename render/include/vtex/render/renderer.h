@@ -163,6 +163,9 @@ struct RenderStats {
     /// measured for fitted levels (docs/render.md, "Shadows at the level that lights what is
     /// seen"; empty: the footprint's level, never coarser than the coarsest faithful one).
     std::vector<std::vector<int>> shadowLevels;
+    /// Per texel: "stored" when the levels above came from the .vto (`vtex build --source`),
+    /// "measured" when the load measured them against the source, "none" without a source.
+    std::vector<std::string> sourceMeasures;
     /// Texel renders: "exact", or ApproximationBudget::key() of the budget used.
     std::string approximations;
     /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:

@@ -7,6 +7,7 @@
 
 #include <vtex/ingest/mesh.h>
 #include <vtex/octree/chord_transmittance.h>
+#include <vtex/octree/octree.h>
 #include <vtex/octree/volume.h>
 #include <vtex/render/geometry.h>
 
@@ -78,6 +79,24 @@ inline constexpr int kLevelFitChords = 16384;
 /// The chords the renderer measures a texel's faithful levels and its lit fractions with at load
 /// (texel_runtime.cpp; the mean of each has a standard error ≤ 0.5/√4096 = 0.008), seed 1.
 inline constexpr int kLoadChords = 4096;
+
+/// What a render measures of a texel against its source at load, stored by `vtex build --source`
+/// in the .vto (octree::SourceMeasures, the MEAS section) so that renders need not measure it:
+/// the faithful levels, each level's density scale (kLevelFitChords shell chords), the shadow
+/// levels and the hybrid's mesh level (kLoadChords chords each), as a render with the default
+/// options (hybrid and level fit on) measures them for a texel of τ `tau` at chord tolerance
+/// `tolerance` (RenderOptions::hybridTolerance). Deterministic: the same inputs give the same bits.
+octree::SourceMeasures measureSource(const octree::Octree& tree, const ingest::TriangleMesh& source, double tau,
+                                     double tolerance);
+/// The version a record of measureSource carries: a digest of the measuring rules' revision and of
+/// the constants above they depend on, so that a texel measured by another build of them is
+/// measured again rather than trusted.
+std::uint32_t sourceMeasuresVersion();
+/// XXH3-64 of a mesh's geometry (positions and triangles), all the measures see of the source.
+std::uint64_t sourceGeometryHash(const ingest::TriangleMesh& mesh);
+/// Whether a stored record is what measureSource would give now for a source of geometry hash
+/// `geometryHash`, τ `tau` and tolerance `tolerance`.
+bool measuresApply(const octree::SourceMeasures& stored, std::uint64_t geometryHash, double tau, double tolerance);
 
 /// How faithful each level of a texel is to its source mesh (issue 13's measure): the
 /// transmittance along 4096 random chords of the whole texel, and over 256 beams of the level
