@@ -175,6 +175,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         // carries an earlier tree's measures, which were of other levels.
         if (source) {
             tree.measures = render::measureSource(tree, *source, flags->tau, render::RenderOptions{}.hybridTolerance);
+            tree.measures->fileHash = render::sourceFileHash(flags->source);
             how += ", source measures stored";
         }
         octree::writeVto(tree, flags->output);

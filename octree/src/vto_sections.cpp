@@ -77,6 +77,7 @@ std::string measuresBytes(const SourceMeasures& m) {
     ByteWriter w;
     w.u32(m.version);
     w.u64(m.geometryHash);
+    w.u64(m.fileHash);
     w.f64(m.tau);
     w.f64(m.tolerance);
     w.u32(std::uint32_t(m.faithfulCoarsest));
@@ -96,6 +97,7 @@ SourceMeasures parseVtoMeasures(std::string_view payload, const Octree& tree, co
     SourceMeasures m;
     m.version = r.u32();
     m.geometryHash = r.u64();
+    m.fileHash = r.u64();
     m.tau = r.f64();
     m.tolerance = r.f64();
     m.faithfulCoarsest = std::int32_t(r.u32());

@@ -147,6 +147,7 @@ Json BuildWork::run(const std::vector<Stage>& stages, const Stage& self) const {
     // source at load, stored in the octree as `vtex build --source` does (render::measureSource).
     const ingest::TriangleMesh source = ingest::loadMesh(sourceFile);
     tree.measures = render::measureSource(tree, source, 1.0, render::RenderOptions{}.hybridTolerance);
+    tree.measures->fileHash = render::sourceFileHash(sourceFile);
     octree::writeVto(tree, self.outputs.at("octree"));
     // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
     const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, source);

@@ -337,11 +337,12 @@ RenderResult renderSceneInArena(const Scene& scene, const RenderOptions& options
                         estimateRenderMemory(scene, options), options.maxMemoryBytes);
 
     const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene);
+    const double coneSpread = detail::coneSpread(scene.camera.fovY, height, strata);
     // Texels referenced by some surface (the others are not loaded).
-    const std::vector<TexelRuntime> texels = detail::loadTexels(scene, options);
+    const std::vector<TexelRuntime> texels = detail::loadTexels(
+        scene, options, detail::finestRequestedLevels(scene, geometry, coneSpread, options.lodBias));
 
     const detail::CameraRays camera(scene.camera, width, height);
-    const double coneSpread = detail::coneSpread(scene.camera.fovY, height, strata);
     const Integrator integrator(scene, options, *geometry.tracer, geometry.surfaces, texels, coneSpread);
     const auto renderStart = std::chrono::steady_clock::now();
     const double loadSeconds = std::chrono::duration<double>(renderStart - loadStart).count();
@@ -387,6 +388,7 @@ RenderResult renderSceneInArena(const Scene& scene, const RenderOptions& options
         const TexelDef& def = scene.texels[i];
         const bool sourced = def.sourceData || !def.source.empty();
         result.stats.sourceMeasures.push_back(t.measuresStored ? "stored" : sourced ? "measured" : "none");
+        result.stats.sourceLoaded.push_back(t.source.loaded());
         detail::countVtoBytes(scene.texels[i], t.volume->tree(), result.stats);
     }
     result.stats.approximations = options.approximations.isExact() ? "exact" : options.approximations.key();
@@ -446,6 +448,7 @@ std::string formatStatsJson(const RenderStats& s) {
         j["level_scales"] = s.levelScales;
         j["shadow_levels"] = s.shadowLevels;
         j["source_measures"] = s.sourceMeasures;
+        j["source_loaded"] = s.sourceLoaded;
         j["approximations"] = s.approximations;
     }
     if (s.renderer != "texel") j["reference_triangles"] = s.referenceTriangles;

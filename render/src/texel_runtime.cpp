@@ -3,16 +3,21 @@
 
 #include <vtex/core/error.h>
 #include <vtex/octree/chord_transmittance.h>
+#include <vtex/octree/volume.h>
 #include <vtex/render/source_visibility.h>
 
 #include "footprint.h"
 #include "near_shadow_table.h"
 
+#include <tbb/task_arena.h>
+
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -165,9 +170,86 @@ void applyMeasures(TexelRuntime& t, const octree::SourceMeasures& m, bool hybrid
     }
 }
 
+// Whether `file` holds the bytes of XXH3 `hash`; false when it cannot be read (the mesh's
+// reading then reports why, naming the scene's key).
+bool sameFile(const std::filesystem::path& file, std::uint64_t hash) {
+    try {
+        return sourceFileHash(file) == hash;
+    } catch (const InputError&) {
+        return false;
+    }
+}
+
 }  // namespace
 
-std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options) {
+struct SourceHandle::State {
+    octree::VolumeInfo volume;
+    std::function<Mesh()> read;
+    std::once_flag once;
+    std::atomic<const SourceBvh*> ready{nullptr};
+    Mesh mesh;  // SourceBvh keeps a reference to it
+    std::unique_ptr<const SourceBvh> bvh;
+
+    void build(Mesh m) {
+        mesh = std::move(m);
+        bvh = std::make_unique<const SourceBvh>(*mesh, volume);
+        ready.store(bvh.get(), std::memory_order_release);
+    }
+};
+
+SourceHandle::SourceHandle(Mesh mesh, const octree::VolumeInfo& volume) : mState(std::make_unique<State>()) {
+    mState->volume = volume;
+    mState->build(std::move(mesh));
+}
+
+SourceHandle::SourceHandle(std::function<Mesh()> read, const octree::VolumeInfo& volume)
+    : mState(std::make_unique<State>()) {
+    mState->volume = volume;
+    mState->read = std::move(read);
+}
+
+SourceHandle::SourceHandle() = default;
+SourceHandle::SourceHandle(SourceHandle&&) noexcept = default;
+SourceHandle& SourceHandle::operator=(SourceHandle&&) noexcept = default;
+SourceHandle::~SourceHandle() = default;
+
+const SourceBvh& SourceHandle::operator*() const {
+    if (const SourceBvh* bvh = mState->ready.load(std::memory_order_acquire)) return *bvh;
+    // Read inside a pixel's task: isolated, so that the reading's and Embree's own parallel loops
+    // cannot take another pixel's task on this thread, which would wait here for itself.
+    std::call_once(mState->once, [&] { tbb::this_task_arena::isolate([&] { mState->build(mState->read()); }); });
+    return *mState->ready.load(std::memory_order_acquire);
+}
+
+const ingest::TriangleMesh& SourceHandle::mesh() const {
+    **this;
+    return *mState->mesh;
+}
+
+bool SourceHandle::loaded() const { return mState && mState->ready.load(std::memory_order_acquire); }
+
+std::vector<double> finestRequestedLevels(const Scene& scene, const SceneGeometry& geometry, double coneSpread,
+                                          double lodBias) {
+    std::vector<double> finest(scene.texels.size(), -std::numeric_limits<double>::infinity());
+    const Vec3 lo = geometry.tracer->boundsLo(), hi = geometry.tracer->boundsHi();
+    const Vec3 eye = scene.camera.position;
+    const double distance = (eye - eye.cwiseMax(lo).cwiseMin(hi)).norm();
+    const PrimTable& prims = geometry.tracer->prims();
+    std::optional<Prim> scratch;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        if (!prims.textured(i)) continue;
+        const Prim& prim = prims.at(i, scratch);
+        const double scale = prim.cell.size() * std::cbrt(std::max(1.0, 1.0 / prim.map.areaScale()));
+        const double level = distance > 0 && coneSpread > 0 ? -std::log2(coneSpread * distance / scale) - lodBias
+                                                            : std::numeric_limits<double>::infinity();
+        double& texel = finest[std::size_t(geometry.surfaces[std::size_t(prim.surface)].texel)];
+        texel = std::max(texel, std::isnan(level) ? std::numeric_limits<double>::infinity() : level);
+    }
+    return finest;
+}
+
+std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options,
+                                     const std::vector<double>& finestRequested) {
     std::vector<TexelRuntime> texels(scene.texels.size());
     for (const std::size_t index : usedTexels(scene)) {
         TexelRuntime& t = texels.at(index);
@@ -186,19 +268,28 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
         // reads none of the levels the measure would have (a texel faithful to its finest
         // level: all of them).
         if (def.sourceData || !def.source.empty()) {
-            t.sourceMesh = loadTexelSource(scene, index);
-            auto source = std::make_unique<const SourceBvh>(*t.sourceMesh, tree->info.source);
-            const bool defaults = options.hybrid && options.fitLevels;
-            t.measuresStored = defaults && tree->measures &&
-                               measuresApply(*tree->measures, sourceGeometryHash(*t.sourceMesh), def.tau,
-                                             options.hybridTolerance);
-            applyMeasures(t,
-                          t.measuresStored ? *tree->measures
-                                           : measureWith(*tree, *source, def.tau, options.hybridTolerance,
-                                                         options.hybrid, options.fitLevels),
-                          options.hybrid);
-            if (options.hybrid) t.source = std::move(source);
-            else t.sourceMesh.reset();
+            const octree::SourceMeasures* stored =
+                options.hybrid && options.fitLevels && tree->measures &&
+                        measuresApply(*tree->measures, def.tau, options.hybridTolerance)
+                    ? &*tree->measures
+                    : nullptr;
+            // The record's source file, byte for byte: the mesh is read when a ray first needs it.
+            const bool meshUnasked = index < finestRequested.size() && stored && finestRequested[index] <= stored->meshLevel;
+            if (meshUnasked && !def.sourceData && stored->fileHash != 0 && sameFile(def.source, stored->fileHash)) {
+                t.measuresStored = true;
+                applyMeasures(t, *stored, true);
+                t.source = SourceHandle([&scene, index] { return loadTexelSource(scene, index); }, tree->info.source);
+            } else {
+                // Another file (or a mesh given in memory) may still be the record's geometry.
+                SourceHandle source(loadTexelSource(scene, index), tree->info.source);
+                t.measuresStored = stored && stored->geometryHash == sourceGeometryHash(source.mesh());
+                applyMeasures(t,
+                              t.measuresStored ? *stored
+                                               : measureWith(*tree, *source, def.tau, options.hybridTolerance,
+                                                             options.hybrid, options.fitLevels),
+                              options.hybrid);
+                if (options.hybrid) t.source = std::move(source);
+            }
         }
         t.volume = std::make_unique<const MarchVolume>(std::move(tree));
     }
@@ -238,9 +329,13 @@ octree::SourceMeasures measureSource(const octree::Octree& tree, const ingest::T
     return m;
 }
 
-bool measuresApply(const octree::SourceMeasures& stored, std::uint64_t geometryHash, double tau, double tolerance) {
-    return stored.version == sourceMeasuresVersion() && stored.geometryHash == geometryHash && stored.tau == tau &&
-           stored.tolerance == tolerance;
+std::uint64_t sourceFileHash(const std::filesystem::path& file) {
+    const std::string bytes = octree::readFileBytes(file);
+    return XXH3_64bits(bytes.data(), bytes.size());
+}
+
+bool measuresApply(const octree::SourceMeasures& stored, double tau, double tolerance) {
+    return stored.version == sourceMeasuresVersion() && stored.tau == tau && stored.tolerance == tolerance;
 }
 
 }  // namespace vtex::render

@@ -12,11 +12,45 @@
 #include "source_bvh.h"
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <vector>
 
 namespace vtex::render::detail {
+
+/// A texel's source mesh in the BVH the hybrid traces, read and put together either at load or
+/// the first time a ray asks for it (thread-safe: one thread loads, the others wait). With the
+/// load's measures stored in the texel and its source file the one they were measured from, a
+/// view whose footprints never reach the mesh level — a far view — never reads, repairs or
+/// indexes the mesh (docs/render.md, "Measured once, at build").
+class SourceHandle {
+public:
+    using Mesh = std::shared_ptr<const ingest::TriangleMesh>;
+    /// No source: false in a test, never loaded.
+    SourceHandle();
+    /// The source's BVH over `mesh`, now.
+    SourceHandle(Mesh mesh, const octree::VolumeInfo& volume);
+    /// The source from `read` (a mesh, checked), placed by `volume`, when first asked for.
+    SourceHandle(std::function<Mesh()> read, const octree::VolumeInfo& volume);
+    SourceHandle(SourceHandle&&) noexcept;
+    SourceHandle& operator=(SourceHandle&&) noexcept;
+    ~SourceHandle();
+
+    explicit operator bool() const { return mState != nullptr; }
+    /// The BVH, read first if it was not (exceptions of the reading pass through, and the next
+    /// call reads again).
+    const SourceBvh& operator*() const;
+    const SourceBvh* operator->() const { return &**this; }
+    /// The mesh, read first if it was not.
+    const ingest::TriangleMesh& mesh() const;
+    /// Whether the mesh has been read (at load, or by a ray since).
+    bool loaded() const;
+
+private:
+    struct State;
+    std::unique_ptr<State> mState;
+};
 
 struct TexelRuntime {
     std::unique_ptr<const MarchVolume> volume;
@@ -25,8 +59,7 @@ struct TexelRuntime {
     /// The mesh/volume hybrid (docs/render.md, "Mesh where the volume is not faithful"): the
     /// texel's source mesh, traced where a footprint asks for a level finer than `meshLevel`
     /// (blended over the next level); no source, or the hybrid off: never.
-    std::shared_ptr<const ingest::TriangleMesh> sourceMesh;
-    std::unique_ptr<const detail::SourceBvh> source;
+    SourceHandle source;
     double meshLevel = std::numeric_limits<double>::infinity();
     /// The finest level the load measured as faithful, before kFinestMarchedLevel capped the
     /// levels the hybrid marches: never below the mesh level, which is chosen among the capped
@@ -113,8 +146,20 @@ inline LevelChoice volumeUnderMesh(LevelChoice choice, double meshLevel) {
 /// table's, NearShadowTable::kMaxLevel), else the coarsest of them.
 std::vector<int> shadowLevelsFrom(const octree::LitFractions& lit, int coarsest, double margin, int tableLevel);
 
+/// Per scene texel, a level no ray of the render asks for a finer one of (LevelChoice::requested,
+/// camera spans and shadow rays alike; −∞ for a texel no surface places): every ray starts at
+/// the eye or at a point it sees, so at least the distance from the eye to the scene's bounds
+/// away, and a cell's local scale is at most its size (a trilinear map's Jacobian columns are
+/// means of its edges), over the cube root of its map's area scale where that is below 1.
+/// `coneSpread`: the cone's width per unit distance (Integrator).
+std::vector<double> finestRequestedLevels(const Scene& scene, const SceneGeometry& geometry, double coneSpread,
+                                          double lodBias);
+
 /// One entry per scene texel; those that no surface uses stay empty (not loaded). Throws
 /// vtex::InputError naming a volume without a root, or a source that cannot be read.
-std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options);
+/// `finestRequested` (finestRequestedLevels; empty: unknown) lets a texel whose stored measures
+/// apply leave its source mesh unread when no ray can ask for its mesh level.
+std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& options,
+                                     const std::vector<double>& finestRequested = {});
 
 }  // namespace vtex::render::detail

@@ -62,6 +62,9 @@ public:
                              SpanCache* cache = nullptr) const;
 
     const PrimTable& prims() const { return mPrims; }
+    /// The bounds of every primitive (empty, lo > hi, without any).
+    const Vec3& boundsLo() const { return mLo; }
+    const Vec3& boundsHi() const { return mHi; }
 
 private:
     /// Whether o + t·d can meet the primitives' bounds for some t in (tNear + a hair, tFar].

@@ -160,6 +160,7 @@ SourceMeasures sampleMeasures() {
     SourceMeasures m;
     m.version = 0x1234abcd;
     m.geometryHash = 0xfedcba9876543210ull;
+    m.fileHash = 0x0123456789abcdefull;
     m.tau = 1.5;
     m.tolerance = 0.02;
     m.faithfulCoarsest = 1;

@@ -6,13 +6,22 @@
 #include "fixtures.h"
 #include "run_vtex.h"
 
+#include "../../render/src/footprint.h"
+#include "../../render/src/texel_runtime.h"
+
+#include <vtex/core/error.h>
 #include <vtex/render/source_visibility.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
+#include <atomic>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 
 using namespace vtex::render;
 using namespace vtex::render::test;
@@ -87,9 +96,12 @@ TEST(SourceMeasures, ARecordForAnotherSourceTauToleranceOrVersionIsNotTaken) {
     EXPECT_EQ(taken(bush, defaults), "measured");
 }
 
-// End to end: `vtex build --source` stores the measures, `vtex render` takes them, draws the same
-// image and, seen from afar, reads a fraction of the file, where measuring read all of it;
-// `--tau` stores them for another τ, which a scene of τ 1 then measures again.
+// End to end: `vtex build --source` stores the measures and the source file's hash; `vtex render`
+// takes them and draws the same image. Seen from afar, where no ray can ask for the mesh level,
+// it reads neither the source mesh nor the finest levels the measure read (all of the file,
+// 4000 leaves at 128³ being faithful to the finest level); nearer, it reads the mesh at load.
+// `--tau` stores them for another τ, which a scene of τ 1 then measures again, and a source file
+// replaced by another mesh is measured again.
 TEST(SourceMeasures, BuildWithItsSourceStoresWhatTheRenderTakes) {
     const fs::path dir = fs::path(VTEX_TEST_TMP) / "source_measures";
     fs::remove_all(dir);
@@ -100,40 +112,105 @@ TEST(SourceMeasures, BuildWithItsSourceStoresWhatTheRenderTakes) {
     };
     const std::string d = dir.string() + "/";
     run({"pattern", "bush", "--leaves", "4000", "-o", d + "bush.glb", "-q"});
+    run({"pattern", "bush", "--leaves", "4000", "--seed", "2", "-o", d + "other.glb", "-q"});
     run({"sample", d + "bush.glb", "-r", "128", "-o", d + "bush.vtl", "-q"});
     run({"build", d + "bush.vtl", "-o", d + "plain.vto", "-q"});
     run({"build", d + "bush.vtl", "-o", d + "stored.vto", "--source", d + "bush.glb", "-q"});
     run({"build", d + "bush.vtl", "-o", d + "tau2.vto", "--source", d + "bush.glb", "--tau", "2", "-q"});
     std::ofstream(dir / "ground.obj") << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\n";
-    for (const std::string volume : {"plain", "stored", "tau2"})
-        std::ofstream(dir / (volume + ".toml"))
-            << "[camera]\nposition = [6.6, -7.2, 6.0]\nlook_at = [0, 0, 0.4]\nwidth = 48\nheight = 36\n"
-               "[[light]]\ntype = \"directional\"\ndirection = [-1, -0.5, -1]\ncolor = [3, 3, 3]\n"
-               "[[texel]]\nname = \"bush\"\nvolume = \""
-            << volume
-            << ".vto\"\nsource = \"bush.glb\"\n"
-               "[[surface]]\nmesh = \"ground.obj\"\ntexel = \"bush\"\nheight = 1.0\nrepeat = [2, 2]\n";
+    const auto scene = [&](const std::string& name, const std::string& volume, const std::string& source,
+                           const std::string& eye) {
+        std::ofstream(dir / (name + ".toml"))
+            << "[camera]\nposition = " << eye << "\nlook_at = [0, 0, 0.4]\nwidth = 48\nheight = 36\n"
+            << "[[light]]\ntype = \"directional\"\ndirection = [-1, -0.5, -1]\ncolor = [3, 3, 3]\n"
+            << "[[texel]]\nname = \"bush\"\nvolume = \"" << volume << ".vto\"\nsource = \"" << source << ".glb\"\n"
+            << "[[surface]]\nmesh = \"ground.obj\"\ntexel = \"bush\"\nheight = 1.0\nrepeat = [2, 2]\n";
+    };
+    const std::string far = "[6.6, -7.2, 6.0]", near = "[0.9, -1.0, 0.9]";
+    scene("plain", "plain", "bush", far);
+    scene("stored", "stored", "bush", far);
+    scene("tau2", "tau2", "bush", far);
+    scene("other", "stored", "other", far);
+    scene("near-plain", "plain", "bush", near);
+    scene("near-stored", "stored", "bush", near);
     struct Rendered {
-        std::string stats;
+        nlohmann::json stats;
         Image image;
     };
     const auto render = [&](const std::string& name) {
         run({"render", d + name + ".toml", "-o", d + name + ".exr", "--stats", d + name + ".json", "-q"});
-        return Rendered{vtex::test::readText(dir / (name + ".json")), readExr(dir / (name + ".exr"))};
+        return Rendered{nlohmann::json::parse(vtex::test::readText(dir / (name + ".json"))), readExr(dir / (name + ".exr"))};
     };
-    const Rendered plain = render("plain"), stored = render("stored"), tau2 = render("tau2");
-    EXPECT_NE(plain.stats.find("\"measured\""), std::string::npos) << plain.stats;
-    EXPECT_NE(stored.stats.find("\"stored\""), std::string::npos) << stored.stats;
-    EXPECT_NE(tau2.stats.find("\"measured\""), std::string::npos) << tau2.stats;
+    const Rendered plain = render("plain"), stored = render("stored"), tau2 = render("tau2"), other = render("other");
+    const Rendered nearPlain = render("near-plain"), nearStored = render("near-stored");
+    const auto says = [](const Rendered& r, const char* measures, bool loaded) {
+        return r.stats["source_measures"] == nlohmann::json::array({measures}) &&
+               r.stats["source_loaded"] == nlohmann::json::array({loaded});
+    };
+    EXPECT_TRUE(says(plain, "measured", true)) << plain.stats.dump();
+    EXPECT_TRUE(says(stored, "stored", false)) << stored.stats.dump();
+    EXPECT_TRUE(says(tau2, "measured", true)) << tau2.stats.dump();
+    EXPECT_TRUE(says(other, "measured", true)) << other.stats.dump();
+    EXPECT_TRUE(says(nearPlain, "measured", true)) << nearPlain.stats.dump();
+    EXPECT_TRUE(says(nearStored, "stored", true)) << nearStored.stats.dump();
+    EXPECT_GT(nearStored.stats["mesh_segments"].get<double>(), 0);
     EXPECT_TRUE(sameBytes(plain.image, stored.image));
     EXPECT_TRUE(sameBytes(plain.image, tau2.image));
-    const auto bytesRead = [](const std::string& stats) {
-        const auto at = stats.find("\"vto_bytes_read\": ");
-        return at == std::string::npos ? 0ull : std::stoull(stats.substr(at + 18));
-    };
-    // 4000 leaves at 128³ are faithful to the finest level, which the load's measure reads
-    // (the whole file); the far view itself reads levels 0–6, up to the profile's (a quarter).
-    EXPECT_EQ(bytesRead(plain.stats), fs::file_size(dir / "plain.vto"));
-    EXPECT_GT(bytesRead(stored.stats), 0u);
-    EXPECT_LT(bytesRead(stored.stats), fs::file_size(dir / "stored.vto") / 3);
+    EXPECT_TRUE(sameBytes(nearPlain.image, nearStored.image));
+    const auto bytesRead = [](const Rendered& r) { return r.stats["vto_bytes_read"].get<std::uint64_t>(); };
+    EXPECT_EQ(bytesRead(plain), fs::file_size(dir / "plain.vto"));
+    EXPECT_GT(bytesRead(stored), 0u);
+    EXPECT_LT(bytesRead(stored), fs::file_size(dir / "stored.vto") / 3);  // levels 0–6, up to the profile's
+}
+
+// The source read when first asked for (SourceHandle, what a far view with stored measures holds
+// instead of the mesh): read once however many pixels ask at once, and a failed read passes its
+// error on and is tried again by the next ray, as a damaged level is.
+TEST(SourceMeasures, ALazySourceIsReadOnceAndAFailedReadIsTriedAgain) {
+    const SourcedTexel& bush = smallBush();
+    std::atomic<int> reads{0};
+    std::atomic<bool> fail{true};
+    const vtex::render::detail::SourceHandle handle(
+        [&] {
+            ++reads;
+            if (fail) throw vtex::InputError("bush.glb", "not there yet");
+            return bush.mesh;
+        },
+        bush.tree->info.source);
+    ASSERT_TRUE(handle);
+    EXPECT_FALSE(handle.loaded());
+    EXPECT_THROW(*handle, vtex::InputError);
+    EXPECT_FALSE(handle.loaded());
+    fail = false;
+    std::atomic<int> hits{0};
+    tbb::parallel_for(0, 256, [&](int i) {
+        const double x = (i % 16 + 0.5) / 16, y = (i / 16 + 0.5) / 16;
+        if (handle->intersect(Vec3(x, y, 1), Vec3(x, y, 0), 0)) ++hits;
+    });
+    EXPECT_EQ(reads.load(), 2);  // the failed read and one more
+    EXPECT_TRUE(handle.loaded());
+    EXPECT_GT(hits.load(), 0);
+    EXPECT_EQ(&handle.mesh(), bush.mesh.get());
+}
+
+// The bound a far view's lazy source rests on (finestRequestedLevels): no camera span asks for a
+// level finer than it, and where it is not finer than the mesh level no ray traces the mesh.
+TEST(SourceMeasures, NoRayAsksForALevelFinerThanTheBound) {
+    for (const Eigen::Vector3d& eye : {Eigen::Vector3d(9, -10, 8), Eigen::Vector3d(2.2, -2.4, 2.0), Eigen::Vector3d(0.5, -0.6, 1.3)}) {
+        const Scene scene = bushField(eye, 48);
+        const auto geometry = vtex::render::detail::buildSceneGeometry(scene);
+        const double spread = vtex::render::detail::coneSpread(scene.camera.fovY, scene.camera.height, 1);
+        const std::vector<double> bound = vtex::render::detail::finestRequestedLevels(scene, geometry, spread, 0);
+        ASSERT_EQ(bound.size(), 1u);
+        const RenderResult r = renderQuiet(scene);
+        int finest = -1;
+        for (std::size_t l = 0; l < r.stats.levelHistogram.size(); ++l)
+            if (r.stats.levelHistogram[l] > 0) finest = int(l);
+        EXPECT_LE(finest, std::ceil(bound[0])) << "eye " << eye.transpose();
+        if (bound[0] <= r.stats.meshLevels.at(0)) {
+            EXPECT_EQ(r.stats.meshSegments, 0.0) << "eye " << eye.transpose();
+        }
+        std::cout << "eye " << eye.transpose() << ": bound " << bound[0] << ", finest level marched " << finest
+                  << ", mesh level " << r.stats.meshLevels.at(0) << ", mesh segments " << r.stats.meshSegments << "\n";
+    }
 }

@@ -73,6 +73,7 @@ struct OctreeInfo {
 struct SourceMeasures {
     std::uint32_t version = 0;       ///< the measuring code's version (render::sourceMeasuresVersion)
     std::uint64_t geometryHash = 0;  ///< of the source mesh (render::sourceGeometryHash)
+    std::uint64_t fileHash = 0;      ///< of the source file's bytes the build read (render::sourceFileHash; 0: none)
     double tau = 0;                  ///< the texel's τ measured with
     double tolerance = 0;            ///< the hybrid's chord tolerance measured with
     std::int32_t faithfulCoarsest = 0, faithfulFinest = 0;  ///< as measured, before any cap

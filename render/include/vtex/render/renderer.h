@@ -166,6 +166,9 @@ struct RenderStats {
     /// Per texel: "stored" when the levels above came from the .vto (`vtex build --source`),
     /// "measured" when the load measured them against the source, "none" without a source.
     std::vector<std::string> sourceMeasures;
+    /// Per texel, whether its source mesh was read: at load, or by the first ray that traced it
+    /// when the stored measures let the load leave it (false without a source).
+    std::vector<bool> sourceLoaded;
     /// Texel renders: "exact", or ApproximationBudget::key() of the budget used.
     std::string approximations;
     /// Reference renders: triangles in the BVHs (embedded: each source mesh once; deformed:

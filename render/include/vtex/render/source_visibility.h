@@ -12,6 +12,7 @@
 #include <vtex/render/geometry.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -94,9 +95,13 @@ octree::SourceMeasures measureSource(const octree::Octree& tree, const ingest::T
 std::uint32_t sourceMeasuresVersion();
 /// XXH3-64 of a mesh's geometry (positions and triangles), all the measures see of the source.
 std::uint64_t sourceGeometryHash(const ingest::TriangleMesh& mesh);
-/// Whether a stored record is what measureSource would give now for a source of geometry hash
-/// `geometryHash`, τ `tau` and tolerance `tolerance`.
-bool measuresApply(const octree::SourceMeasures& stored, std::uint64_t geometryHash, double tau, double tolerance);
+/// XXH3-64 of a source file's bytes: a render whose source file is the one the record was measured
+/// from takes the record without reading the mesh (its geometry hash needs the mesh loaded).
+/// Throws vtex::InputError naming the file when it cannot be read.
+std::uint64_t sourceFileHash(const std::filesystem::path& file);
+/// Whether a stored record was measured by these rules (sourceMeasuresVersion) for τ `tau` and
+/// tolerance `tolerance`: then it is what measureSource would give now for the same source.
+bool measuresApply(const octree::SourceMeasures& stored, double tau, double tolerance);
 
 /// How faithful each level of a texel is to its source mesh (issue 13's measure): the
 /// transmittance along 4096 random chords of the whole texel, and over 256 beams of the level
