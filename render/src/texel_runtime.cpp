@@ -273,7 +273,8 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
                         measuresApply(*tree->measures, def.tau, options.hybridTolerance)
                     ? &*tree->measures
                     : nullptr;
-            // The record's source file, byte for byte: the mesh is read when a ray first needs it.
+            // No ray can ask for the mesh level, and the scene's source file holds the bytes the
+            // record was measured from: the mesh is read only if a ray needs it after all.
             const bool meshUnasked = index < finestRequested.size() && stored && finestRequested[index] <= stored->meshLevel;
             if (meshUnasked && !def.sourceData && stored->fileHash != 0 && sameFile(def.source, stored->fileHash)) {
                 t.measuresStored = true;
