@@ -340,7 +340,7 @@ RenderResult renderSceneInArena(const Scene& scene, const RenderOptions& options
     const double coneSpread = detail::coneSpread(scene.camera.fovY, height, strata);
     // Texels referenced by some surface (the others are not loaded).
     const std::vector<TexelRuntime> texels = detail::loadTexels(
-        scene, options, detail::finestRequestedLevels(scene, geometry, coneSpread, options.lodBias));
+        scene, options, detail::finestRequestedLevels(scene, geometry, coneSpread, options));
 
     const detail::CameraRays camera(scene.camera, width, height);
     const Integrator integrator(scene, options, *geometry.tracer, geometry.surfaces, texels, coneSpread);

@@ -14,6 +14,7 @@
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -229,7 +230,13 @@ const ingest::TriangleMesh& SourceHandle::mesh() const {
 bool SourceHandle::loaded() const { return mState && mState->ready.load(std::memory_order_acquire); }
 
 std::vector<double> finestRequestedLevels(const Scene& scene, const SceneGeometry& geometry, double coneSpread,
-                                          double lodBias) {
+                                          const RenderOptions& options) {
+    const double lodBias = options.lodBias;
+    const bool directional = std::any_of(scene.lights.begin(), scene.lights.end(),
+                                         [](const Light& l) { return l.type == LightType::Directional; });
+    const int lattice = options.approximations.shadowCacheResolution;
+    const double nodeLevel = directional && lattice > 0 ? std::log2(double(lattice)) + 1 - lodBias
+                                                        : -std::numeric_limits<double>::infinity();
     std::vector<double> finest(scene.texels.size(), -std::numeric_limits<double>::infinity());
     const Vec3 lo = geometry.tracer->boundsLo(), hi = geometry.tracer->boundsHi();
     const Vec3 eye = scene.camera.position;
@@ -243,7 +250,7 @@ std::vector<double> finestRequestedLevels(const Scene& scene, const SceneGeometr
         const double level = distance > 0 && coneSpread > 0 ? -std::log2(coneSpread * distance / scale) - lodBias
                                                             : std::numeric_limits<double>::infinity();
         double& texel = finest[std::size_t(geometry.surfaces[std::size_t(prim.surface)].texel)];
-        texel = std::max(texel, std::isnan(level) ? std::numeric_limits<double>::infinity() : level);
+        texel = std::max({texel, nodeLevel, std::isnan(level) ? std::numeric_limits<double>::infinity() : level});
     }
     return finest;
 }

@@ -147,13 +147,16 @@ inline LevelChoice volumeUnderMesh(LevelChoice choice, double meshLevel) {
 std::vector<int> shadowLevelsFrom(const octree::LitFractions& lit, int coarsest, double margin, int tableLevel);
 
 /// Per scene texel, a level no ray of the render asks for a finer one of (LevelChoice::requested,
-/// camera spans and shadow rays alike; −∞ for a texel no surface places): every ray starts at
-/// the eye or at a point it sees, so at least the distance from the eye to the scene's bounds
-/// away, and a cell's local scale is at most its size (a trilinear map's Jacobian columns are
-/// means of its edges), over the cube root of its map's area scale where that is below 1.
-/// `coneSpread`: the cone's width per unit distance (Integrator).
+/// camera spans and shadow rays alike; −∞ for a texel no surface places): every camera and
+/// shadow ray's cone starts at the eye or at a point it sees, so at least the distance from the
+/// eye to the scene's bounds away, and a cell's local scale is at most its size (a trilinear
+/// map's Jacobian columns are means of its edges), over the cube root of its map's area scale
+/// where that is below 1. The shadow lattice's node rays take a cone of the lattice's spacing
+/// instead, a level of log2 of its resolution in the node's cell, one more allowed for a
+/// neighbour cell up to twice as fine (ShadowQueries::nodeTransmittance). `coneSpread`: the
+/// cone's width per unit distance (Integrator).
 std::vector<double> finestRequestedLevels(const Scene& scene, const SceneGeometry& geometry, double coneSpread,
-                                          double lodBias);
+                                          const RenderOptions& options);
 
 /// One entry per scene texel; those that no surface uses stay empty (not loaded). Throws
 /// vtex::InputError naming a volume without a root, or a source that cannot be read.

@@ -200,7 +200,7 @@ TEST(SourceMeasures, NoRayAsksForALevelFinerThanTheBound) {
         const Scene scene = bushField(eye, 48);
         const auto geometry = vtex::render::detail::buildSceneGeometry(scene);
         const double spread = vtex::render::detail::coneSpread(scene.camera.fovY, scene.camera.height, 1);
-        const std::vector<double> bound = vtex::render::detail::finestRequestedLevels(scene, geometry, spread, 0);
+        const std::vector<double> bound = vtex::render::detail::finestRequestedLevels(scene, geometry, spread, RenderOptions{});
         ASSERT_EQ(bound.size(), 1u);
         const RenderResult r = renderQuiet(scene);
         int finest = -1;
