@@ -223,7 +223,7 @@ const SourceBvh& SourceHandle::operator*() const {
 }
 
 const ingest::TriangleMesh& SourceHandle::mesh() const {
-    **this;
+    static_cast<void>(**this);  // read first, if it was not
     return *mState->mesh;
 }
 
@@ -286,6 +286,7 @@ std::vector<TexelRuntime> loadTexels(const Scene& scene, const RenderOptions& op
             if (meshUnasked && !def.sourceData && stored->fileHash != 0 && sameFile(def.source, stored->fileHash)) {
                 t.measuresStored = true;
                 applyMeasures(t, *stored, true);
+                // The runtimes live within the render of `scene` (renderScene), so the reference holds.
                 t.source = SourceHandle([&scene, index] { return loadTexelSource(scene, index); }, tree->info.source);
             } else {
                 // Another file (or a mesh given in memory) may still be the record's geometry.
