@@ -174,8 +174,8 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
         // load (render::measureSource), stored in the file: a tree built or updated here never
         // carries an earlier tree's measures, which were of other levels.
         if (source) {
-            tree.measures = render::measureSource(tree, *source, flags->tau, render::RenderOptions{}.hybridTolerance);
-            tree.measures->fileHash = render::sourceFileHash(flags->source);
+            tree.measures = render::measureSource(tree, *source, flags->tau, render::RenderOptions{}.hybridTolerance,
+                                                  flags->source);
             how += ", source measures stored";
         }
         octree::writeVto(tree, flags->output);

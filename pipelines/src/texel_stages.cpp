@@ -146,8 +146,7 @@ Json BuildWork::run(const std::vector<Stage>& stages, const Stage& self) const {
     // What the pipeline's renders (τ 1, default options) measure of the texel against its
     // source at load, stored in the octree as `vtex build --source` does (render::measureSource).
     const ingest::TriangleMesh source = ingest::loadMesh(sourceFile);
-    tree.measures = render::measureSource(tree, source, 1.0, render::RenderOptions{}.hybridTolerance);
-    tree.measures->fileHash = render::sourceFileHash(sourceFile);
+    tree.measures = render::measureSource(tree, source, 1.0, render::RenderOptions{}.hybridTolerance, sourceFile);
     octree::writeVto(tree, self.outputs.at("octree"));
     // Each level's fidelity to the source mesh (issue 13's measure; vtex inspect --source).
     const render::SourceFidelity fidelity = render::measureSourceFidelity(tree, source);

@@ -331,10 +331,11 @@ std::uint64_t sourceGeometryHash(const ingest::TriangleMesh& mesh) {
 }
 
 octree::SourceMeasures measureSource(const octree::Octree& tree, const ingest::TriangleMesh& source, double tau,
-                                     double tolerance) {
+                                     double tolerance, const std::filesystem::path& file) {
     const detail::SourceBvh bvh(source, tree.info.source);
     octree::SourceMeasures m = detail::measureWith(tree, bvh, tau, tolerance, true, true);
     m.geometryHash = sourceGeometryHash(source);
+    if (!file.empty()) m.fileHash = sourceFileHash(file);
     return m;
 }
 

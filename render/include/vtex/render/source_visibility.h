@@ -86,9 +86,11 @@ inline constexpr int kLoadChords = 4096;
 /// the faithful levels, each level's density scale (kLevelFitChords shell chords), the shadow
 /// levels and the hybrid's mesh level (kLoadChords chords each), as a render with the default
 /// options (hybrid and level fit on) measures them for a texel of τ `tau` at chord tolerance
-/// `tolerance` (RenderOptions::hybridTolerance). Deterministic: the same inputs give the same bits.
+/// `tolerance` (RenderOptions::hybridTolerance). `file`, when the mesh was read from one: its
+/// bytes' hash is kept too (sourceFileHash), so that a render reading that file may leave the mesh
+/// unread. Deterministic: the same inputs give the same bits.
 octree::SourceMeasures measureSource(const octree::Octree& tree, const ingest::TriangleMesh& source, double tau,
-                                     double tolerance);
+                                     double tolerance, const std::filesystem::path& file = {});
 /// The version a record of measureSource carries: a digest of the measuring rules' revision and of
 /// the constants above they depend on, so that a texel measured by another build of them is
 /// measured again rather than trusted.
