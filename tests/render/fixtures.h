@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <numbers>
@@ -203,6 +204,11 @@ inline double largestPhongRadiance(double e, const Material& m, double albedo) {
 inline RenderResult renderQuiet(const Scene& scene, RenderOptions options = {}) {
     NullProgress progress;
     return renderScene(scene, options, progress);
+}
+
+// Whether two images hold the same bytes: what a change that must not move the image is held to.
+inline bool sameImageBytes(const Image& a, const Image& b) {
+    return a.rgba.size() == b.rgba.size() && std::memcmp(a.rgba.data(), b.rgba.data(), a.rgba.size() * sizeof(float)) == 0;
 }
 
 inline bool allFinite(const Image& image) {

@@ -12,7 +12,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -72,10 +71,6 @@ Scene bushField(const Eigen::Vector3d& eye, bool lazy, int width, int height) {
     return scene;
 }
 
-bool sameBytes(const Image& a, const Image& b) {
-    return a.rgba.size() == b.rgba.size() && std::memcmp(a.rgba.data(), b.rgba.data(), a.rgba.size() * sizeof(float)) == 0;
-}
-
 // The deepest level whose section `stats` says was read: levels are read whole and in order, so
 // the bytes read are the header and levels 0 … ℓ; −2 if they are no such sum.
 int deepestLevelRead(const RenderStats& stats) {
@@ -98,7 +93,7 @@ TEST(LazyLevels, AFarViewReadsOnlyItsCoarseLevelsAndDrawsTheImageOfTheTreeReadWh
     const Eigen::Vector3d far(36.725582, -63.610577, 42.907051);  // bench/bush_field.py, 85 units
     const RenderResult lazy = renderQuiet(bushField(far, true, 96, 72));
     const RenderResult eager = renderQuiet(bushField(far, false, 96, 72));
-    EXPECT_TRUE(sameBytes(lazy.image, eager.image));
+    EXPECT_TRUE(sameImageBytes(lazy.image, eager.image));
     EXPECT_EQ(lazy.stats.vtoFileBytes, fileSize);
     EXPECT_EQ(eager.stats.vtoBytesRead, 0u);  // given in memory
     const int deepest = deepestLevelRead(lazy.stats);
@@ -131,7 +126,7 @@ TEST(LazyLevels, ANearerViewReadsDeeperLevelsAndStillDrawsTheSameImage) {
     const Eigen::Vector3d near(1.784539, -3.090912, 2.560608);
     const RenderResult lazy = renderQuiet(bushField(near, true, 160, 120));
     const RenderResult eager = renderQuiet(bushField(near, false, 160, 120));
-    EXPECT_TRUE(sameBytes(lazy.image, eager.image));
+    EXPECT_TRUE(sameImageBytes(lazy.image, eager.image));
     const int deepest = deepestLevelRead(lazy.stats);
     EXPECT_GE(deepest, deepestLevelMarched(lazy.stats));
     EXPECT_GE(deepestLevelMarched(lazy.stats), 6);

@@ -18,7 +18,6 @@
 
 #include <atomic>
 #include <cmath>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -31,10 +30,6 @@ namespace fs = std::filesystem;
 namespace {
 
 const Eigen::Vector3d kEye(2.2, -2.4, 2.0);  // footprints from the volume's levels to the mesh's
-
-bool sameBytes(const Image& a, const Image& b) {
-    return a.rgba.size() == b.rgba.size() && std::memcmp(a.rgba.data(), b.rgba.data(), a.rgba.size() * sizeof(float)) == 0;
-}
 
 // `texel` with `measures` stored in a copy of its tree.
 SourcedTexel withMeasures(const SourcedTexel& texel, const vtex::octree::SourceMeasures& measures) {
@@ -60,7 +55,7 @@ TEST(SourceMeasures, StoredMeasuresRenderTheImageTheLoadMeasures) {
     EXPECT_EQ(stored.stats.levelScales, measured.stats.levelScales);
     EXPECT_EQ(stored.stats.shadowLevels, measured.stats.shadowLevels);
     EXPECT_EQ(stored.stats.meshLevels, measured.stats.meshLevels);
-    EXPECT_TRUE(sameBytes(stored.image, measured.image));
+    EXPECT_TRUE(sameImageBytes(stored.image, measured.image));
 }
 
 // A record is taken only when it is what the load would measure now: the same version of the
@@ -154,9 +149,9 @@ TEST(SourceMeasures, BuildWithItsSourceStoresWhatTheRenderTakes) {
     EXPECT_TRUE(says(nearPlain, "measured", true)) << nearPlain.stats.dump();
     EXPECT_TRUE(says(nearStored, "stored", true)) << nearStored.stats.dump();
     EXPECT_GT(nearStored.stats["mesh_segments"].get<double>(), 0);
-    EXPECT_TRUE(sameBytes(plain.image, stored.image));
-    EXPECT_TRUE(sameBytes(plain.image, tau2.image));
-    EXPECT_TRUE(sameBytes(nearPlain.image, nearStored.image));
+    EXPECT_TRUE(sameImageBytes(plain.image, stored.image));
+    EXPECT_TRUE(sameImageBytes(plain.image, tau2.image));
+    EXPECT_TRUE(sameImageBytes(nearPlain.image, nearStored.image));
     const auto bytesRead = [](const Rendered& r) { return r.stats["vto_bytes_read"].get<std::uint64_t>(); };
     EXPECT_EQ(bytesRead(plain), fs::file_size(dir / "plain.vto"));
     EXPECT_GT(bytesRead(stored), 0u);
