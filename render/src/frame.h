@@ -239,12 +239,13 @@ inline std::optional<Vec3> entryCoords(const Prim& prim, const Hit& hit, const V
 /// reference-space segment between the cell coordinates where it enters and leaves is handed to
 /// `segment(prim, surface, rIn, rOut, startsAtHint, transmittanceSoFar)`, whose transmittance
 /// multiplies in. `startsAtHint`: the ray starts inside cell `hintPrim` at `hintR`, where a
-/// caller's surface point lies. Below `cutoff` the answer is 0.
+/// caller's surface point lies. Below `cutoff` the answer is 0. `tStart`: the ray starts there
+/// (what lies before was accounted for by the caller).
 template <class Segment>
 double walkShadowRay(const Tracer& tracer, const std::vector<SurfaceRuntime>& surfaces, const Vec3& o, const Vec3& l,
-                     double tMax, int hintPrim, const Vec3& hintR, double cutoff, Segment&& segment) {
+                     double tMax, int hintPrim, const Vec3& hintR, double cutoff, Segment&& segment, double tStart = 0) {
     double transmittance = 1;
-    double tNear = 0;
+    double tNear = tStart;
     SpanCache cache;
     for (int step = 0; step < 4096; ++step) {
         const auto hit = tracer.trace(o, l, tNear, tMax, &cache);

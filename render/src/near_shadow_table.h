@@ -106,6 +106,7 @@ public:
     }
 
     const Slot& slot(int i) const { return *mSlots[std::size_t(i)]; }
+    std::size_t slots() const { return mSlots.size(); }
     static bool same(const Vec3& a, const Vec3& b) { return (a - b).cwiseAbs().maxCoeff() <= kSameDirection; }
 
     /// Transmittance of the segment p0 → p0 + step·lr (tiled reference space, within one tile

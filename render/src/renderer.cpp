@@ -38,6 +38,7 @@ ApproximationBudget ApproximationBudget::exact() {
     b.blendCutoff = 0;
     b.lightingReuseWeight = 0;
     b.exactFloorShadowAbove = 0;
+    b.floorShadowTable = false;
     b.shadowRefresh = 1;
     return b;
 }
@@ -50,7 +51,7 @@ std::string ApproximationBudget::key() const {
     k << "share_shadow_rays " << shareShadowRays << " shadow_cache_resolution " << shadowCacheResolution
       << " chain_lattice_nodes " << chainLatticeNodes << " near_shadow_table " << nearShadowTable << " blend_cutoff "
       << blendCutoff << " lighting_reuse_weight " << lightingReuseWeight << " exact_floor_shadow_above "
-      << exactFloorShadowAbove << " shadow_refresh " << shadowRefresh;
+      << exactFloorShadowAbove << " floor_shadow_table " << floorShadowTable << " shadow_refresh " << shadowRefresh;
     return k.str();
 }
 
@@ -166,8 +167,12 @@ private:
         const double scale = std::min(surface.height, patchSize(prim));
         // The hint, just above the floor where the lattice's near march starts inside the cell,
         // is what lets a query use the lattice.
-        const Prim* hint = seenThrough < mOptions.approximations.exactFloorShadowAbove ? &prim : nullptr;
-        return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters, hint, Vec3(r.x(), r.y(), 1e-4));
+        if (seenThrough < mOptions.approximations.exactFloorShadowAbove)
+            return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters, &prim, Vec3(r.x(), r.y(), 1e-4));
+        return detail::shadePhong(mScene.lights, x, n, ng, -d, surface.material, Color::Ones(), scale,
+                                  [&](const Vec3& origin, const Vec3& l, double distance) {
+                                      return mShadows.floorShadow(prim, r, origin, l, distance, mConeSpread * t, counters);
+                                  });
     }
 
     // An opaque surface point; its shadow queries start in cell `hint` at `hintR` when that is

@@ -9,6 +9,7 @@
 #include <vtex/render/texel_march.h>
 
 #include "cell_adjacency.h"
+#include "floor_shadow_table.h"
 #include "frame.h"
 #include "light_cache.h"
 #include "near_shadow_table.h"
@@ -115,7 +116,7 @@ public:
     // `grid`: the level's grid, when there is a slot.
     int nearTableSlot(int slot, int primIndex, const TexelRuntime& texel, const Vec3& lr, int level,
                       const LevelGrid*& grid) const {
-        if (mNearSlots.empty() || level > NearShadowTable::kMaxLevel) return -1;
+        if (mNearSlots.empty() || !mOptions.approximations.nearShadowTable || level > NearShadowTable::kMaxLevel) return -1;
         const int table = mNearSlots[std::size_t(primIndex) * mLightCache.lights() + std::size_t(slot)];
         if (table < 0 || !NearShadowTable::same(mNearTable.slot(table).lr, lr)) return -1;
         grid = texel.volume->grid(level);
@@ -205,7 +206,7 @@ public:
     // segment skips the self-intersection gap even without a hint (a hit of a segment offset
     // across the footprint may lie past the cell's side, where the caller has no cell for it).
     double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
-                        Counters& counters, bool fromSourceHit = false) const {
+                        Counters& counters, bool fromSourceHit = false, double tStart = 0) const {
         ++counters.shadow;
         bool first = true;
         return walkShadowRay(
@@ -233,7 +234,39 @@ public:
                 }
                 if (meshWeight > 0 && !texel.source->occludedLeaving(p0, p1, leavesHit)) result += meshWeight;
                 return result;
-            });
+            },
+            tStart);
+    }
+
+    // A floor point's shadow: at cell coordinates r (w = 0) of `prim`, the shadow ray leaving
+    // from o (world). The floor table where the cell may take it (FloorShadowTable: a flat
+    // field's light lines through the tiled texel, then the exact walk from where the line leaves
+    // the shell's top), otherwise the exact ray (shadowTransmittance without a hint).
+    double floorShadow(const Prim& prim, const Vec3& r, const Vec3& o, const Vec3& l, double tMax, double width,
+                       Counters& counters) const {
+        const int slot = mFloorCells.empty() ? -1 : latticeSlot(l, tMax, prim.index);
+        if (slot >= 0 && mFloorCells[std::size_t(prim.index) * mLightCache.lights() + std::size_t(slot)]) {
+            const TexelRuntime& texel = mTexels[std::size_t(mSurfaces[std::size_t(prim.surface)].texel)];
+            const LevelChoice choice = chooseLevel(width / localScale(prim, r), mOptions.lodBias, texel.volume->maxLevel());
+            const int level = shadowLevel(texel, choice);
+            if (texel.shadowMeshWeight(choice.requested) <= 0 && level <= FloorShadowTable::kMaxLevel) {
+                const int table = mNearSlots[std::size_t(prim.index) * mLightCache.lights() + std::size_t(slot)];
+                const Vec3& lr = mNearTable.slot(table).lr;
+                const Vec3 p = tile(Vec3(r.x(), r.y(), 0), prim);
+                const double t =
+                    mFloorTable.transmittance(table, *texel.volume, texel.tauAt(level), level, lr, p.x(), p.y());
+                if (t <= kTransmittanceCutoff) {
+                    ++counters.shadow;
+                    return 0;
+                }
+                // The line leaves the top (z = 1) after 1/lr.z reference units, 1/(J⁻¹l).z along
+                // l in the world (J: the tiled map's Jacobian, constant over a flat field).
+                const double zRate = (tiledJacobian(prim, r).inverse() * l).z();
+                if (zRate > 0 && std::isfinite(zRate))
+                    return t * tracedShadow(o, l, tMax, width, -1, Vec3::Zero(), counters, false, (1 + 1e-9) / zRate);
+            }
+        }
+        return shadowTransmittance(o, l, tMax, width, nullptr, Vec3::Zero(), counters);
     }
 
     // A shadow march takes a single level (shadows are not blended): the one nearest the cone's
@@ -315,9 +348,11 @@ private:
     static constexpr int kMaxChain = 256;
     // The near tables' slots, fixed before any pixel (in primitive order, so that which cells
     // have one does not depend on the tiles'): cells with a lattice that show one tile of their
-    // texel, by texel and reference-space light direction at the cell's centre.
+    // texel, by texel and reference-space light direction at the cell's centre. The floor tables
+    // take the same slots.
     std::vector<int> makeNearSlots() {
-        if (mLightCache.empty() || !mOptions.approximations.nearShadowTable) return {};
+        if (mLightCache.empty() || !(mOptions.approximations.nearShadowTable || mOptions.approximations.floorShadowTable))
+            return {};
         const std::size_t lights = mLightCache.lights();
         std::vector<int> slots(mTracer.prims().size() * lights, -1);
         for (std::size_t i = 0; i < mTracer.prims().size(); ++i) {
@@ -373,6 +408,12 @@ private:
     NearShadowTable mNearTable;
     // Per primitive and lattice slot, the near table's slot (−1: march); empty: no tables.
     std::vector<int> mNearSlots = makeNearSlots();
+    // Per primitive and lattice slot, whether its floor takes the floor table; empty: none does.
+    std::vector<bool> mFloorCells = mOptions.approximations.floorShadowTable
+                                        ? floorTableCells(mTracer.prims(), mAdjacency, mSurfaces, mNearSlots,
+                                                          mLightCache.lights(), mNearTable)
+                                        : std::vector<bool>{};
+    FloorShadowTable mFloorTable{mNearTable.slots()};
     mutable std::atomic<bool> mChainCut{false};
 };
 

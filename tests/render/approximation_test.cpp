@@ -26,9 +26,10 @@ TEST(Approximations, ExactTurnsEveryOneOffAndTheKeyNamesEveryValue) {
     EXPECT_EQ(exact.blendCutoff, 0.0);
     EXPECT_EQ(exact.lightingReuseWeight, 0.0);
     EXPECT_EQ(exact.exactFloorShadowAbove, 0.0);
+    EXPECT_FALSE(exact.floorShadowTable);
     EXPECT_EQ(exact.shadowRefresh, 1.0);
     // Changing any one value changes the key (the pipeline's cache key is made from it).
-    std::vector<ApproximationBudget> variants(8);
+    std::vector<ApproximationBudget> variants(9);
     variants[0].shareShadowRays = false;
     variants[1].shadowCacheResolution = 16;
     variants[2].blendCutoff = 0.2;
@@ -37,6 +38,7 @@ TEST(Approximations, ExactTurnsEveryOneOffAndTheKeyNamesEveryValue) {
     variants[5].shadowRefresh = 0.5;
     variants[6].chainLatticeNodes = false;
     variants[7].nearShadowTable = false;
+    variants[8].floorShadowTable = false;
     for (const auto& v : variants) EXPECT_NE(v.key(), ApproximationBudget{}.key());
 }
 

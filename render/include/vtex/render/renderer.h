@@ -99,6 +99,10 @@ struct ApproximationBudget {
     /// (as a voxel's do), which moves the pixel by at most that transmittance times the floor's
     /// direct light (docs/render.md, "Shadows"). 0: always exact.
     double exactFloorShadowAbove = 0.05;
+    /// The floor of a flat field of identical cells takes its shadows toward a directional light
+    /// from a table of the transmittance through the tiled texel (docs/render.md, "Shadows";
+    /// FloorShadowTable) instead of an exact ray; false: every floor point casts its ray.
+    bool floorShadowTable = true;
     /// Along a march, a voxel takes a new shadow query once the march's transmittance has fallen
     /// below this fraction of what it was at the last query, and reuses the last one otherwise;
     /// in (0, 1]. 1 (the default): a query at every voxel that absorbs anything, exact. Below 1
