@@ -292,6 +292,27 @@ def main_table(rows, truths):
     return out
 
 
+def equal_error_section(rows):
+    """What the texel's time is worth: the reference's time at each texel row's RMSE, on the
+    reference's own trend between its 1- and 16-spp rows (time ∝ RMSE^−b, a straight line in
+    log-log through the two), and the texel's time over it."""
+    out = ['| view | row | RMSE | time s | reference at that RMSE s | texel / reference | b |',
+           '| --- | --- | ---: | ---: | ---: | ---: | ---: |']
+    for r in rows:
+        if r['section'] not in ('main', 'variant') or r['row'] in ('ref1', 'ref16') or r.get('rmse') is None:
+            continue
+        one, sixteen = find(rows, r['view'], 'ref1'), find(rows, r['view'], 'ref16')
+        if one is None or sixteen is None or not (one.get('rmse') or 0) > (sixteen.get('rmse') or 0) > 0:
+            continue
+        b = math.log(sixteen['wall_seconds'] / one['wall_seconds']) / math.log(one['rmse'] / sixteen['rmse'])
+        reference = one['wall_seconds'] * (one['rmse'] / r['rmse']) ** b
+        outside = not sixteen['rmse'] <= r['rmse'] <= one['rmse']
+        out.append('| %s | %s | %.4f | %.3f | %.3f%s | %.3g | %.2f |' % (
+            r['view'], label(r), r['rmse'], r['wall_seconds'], reference, ' (extrapolated)' if outside else '',
+            r['wall_seconds'] / reference, b))
+    return out
+
+
 def check(goals, name, measured, limit, spec, limit_text):
     """Appends a table row `name | measured | ≤ limit (limit_text) | PASS/FAIL`; True on PASS."""
     ok = measured is not None and measured <= limit
@@ -375,7 +396,11 @@ def report(runs):
     write_csv(rows, distances, truths)
     md = ['# Bush field (issue 12)', '', 'Median of %d run(s) per row, `wall_seconds` of `--stats`; errors '
           'against the truth by `vtex compare` (bias = row mean / truth mean − 1).' % runs, '']
-    md += main_table(rows, truths) + ['', '## Goals (default texel render)', ''] + goals_section(rows)
+    md += main_table(rows, truths)
+    md += ['', '## At equal error', '', 'The reference\'s time at each texel row\'s RMSE, by the reference\'s trend '
+           'between its 1- and 16-spp rows (time ∝ RMSE^−b); below 1 the texel is faster at equal error.', '']
+    md += equal_error_section(rows)
+    md += ['', '## Goals (default texel render)', ''] + goals_section(rows)
     if any(r['section'] == 'dense' for r in rows):
         md += ['', '## Dense bush (20 000 leaves, same 256³ resolution)', ''] + dense_section(rows)
     if any(r['section'] == 'sweep' for r in rows):

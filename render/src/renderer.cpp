@@ -311,15 +311,16 @@ private:
     SpanMarcher mMarcher{mScene, mOptions, mShadows, mConeSpread};
 };
 
-// The shadow lattices' cap (light_cache.h) and the near tables' (near_shadow_table.h) where a
-// texel can meet a directional light: both are allocated as cells are first queried, so the cap,
-// not the use, is what is known before the render.
+// The shadow lattices' cap (light_cache.h) and the near and floor tables' (near_shadow_table.h,
+// floor_shadow_table.h) where a texel can meet a directional light: all are allocated as cells
+// are first queried, so the cap, not the use, is what is known before the render.
 std::uint64_t latticeMemoryCap(const Scene& scene, const RenderOptions& options) {
     if (options.approximations.shadowCacheResolution <= 0) return 0;
     const auto lights = std::uint64_t(std::count_if(scene.lights.begin(), scene.lights.end(),
                                                     [](const Light& l) { return l.type == LightType::Directional; }));
     if (lights == 0 || usedTexels(scene).empty()) return 0;
-    const std::uint64_t tables = options.approximations.nearShadowTable ? lights * detail::NearShadowTable::kBytesPerLight : 0;
+    const std::uint64_t tables = (options.approximations.nearShadowTable ? lights * detail::NearShadowTable::kBytesPerLight : 0) +
+                                 (options.approximations.floorShadowTable ? lights * detail::FloorShadowTable::kBytesPerLight : 0);
     return std::uint64_t(detail::LightTransmittanceCache::kMaxNodes) * sizeof(float) + tables;
 }
 
