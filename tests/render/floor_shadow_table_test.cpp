@@ -2,6 +2,7 @@
 // at its points, close between them in a bush; which cells of a field take it; and on a bush
 // field with an opaque plate above it, within the 0.5 % an approximation on by default may move
 // the image mean, against every floor point casting its exact ray.
+#include "bush_field.h"
 #include "fixtures.h"
 #include "../../render/src/cell_adjacency.h"
 #include "../../render/src/floor_shadow_table.h"
@@ -9,8 +10,6 @@
 
 #include <vtex/render/compare.h>
 #include <vtex/render/texel_march.h>
-#include <vtex/sampler/patterns.h>
-#include <vtex/sampler/sampler.h>
 
 #include <gtest/gtest.h>
 
@@ -22,16 +21,6 @@ using namespace vtex::render;
 using namespace vtex::render::test;
 
 namespace {
-
-std::shared_ptr<const vtex::octree::Octree> smallBush(int leaves, int resolution) {
-    vtex::sampler::PatternOptions pattern;
-    pattern.count = leaves;
-    vtex::sampler::SampleOptions sampling;
-    sampling.resolution = resolution;
-    vtex::NullProgress progress;
-    return std::make_shared<const vtex::octree::Octree>(vtex::octree::buildOctree(
-        vtex::sampler::sampleMesh(vtex::sampler::makePattern("bush", pattern), sampling, progress), {}, progress));
-}
 
 const Eigen::Vector3d kLight = Eigen::Vector3d(1, 0.5, 1).normalized();  // toward the light, the field's
 
@@ -45,7 +34,7 @@ const Eigen::Vector3d kLight = Eigen::Vector3d(1, 0.5, 1).normalized();  // towa
 // kinks darkens), mean |difference| 0.0019–0.0047, the largest 0.11–0.17 (beside a leaf's edge).
 // Bound: means within 1 %, mean |difference| 0.01.
 TEST(FloorShadowTable, IsTheLineAtItsPointsAndCloseBetween) {
-    const MarchVolume volume(smallBush(2000, 64));
+    const MarchVolume volume(makeBush(2000, 64).tree);
     detail::FloorShadowTable table(1);
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> u(0, 1);
@@ -140,7 +129,7 @@ TEST(FloorShadowTable, TakesTheCellsWhoseLineStaysInARegularField) {
 // −0.03 %, RMSE 0.0010 against an image mean of 0.10; the walks' blocks 0.31 M against 0.54 M.
 // Bound: every channel's mean within 0.5 %, RMSE below 5 % of the image mean, fewer blocks marched.
 TEST(FloorShadowTable, MovesABushFieldsMeanByAtMostHalfAPercent) {
-    const auto bush = smallBush(400, 64);
+    const auto bush = makeBush(400, 64).tree;
     const auto field = [&](bool plate) {
         Scene scene = baseScene(Eigen::Vector3d(0.5, 0.5, 9), Eigen::Vector3d(0.5, 0.5, 0), 30, 96);
         scene.camera.up = Eigen::Vector3d(0, 1, 0);

@@ -1,13 +1,12 @@
 // The near shadow table (render/src/near_shadow_table.h) against the march it stands for: exact
 // where its entries were measured, close on average over random queries in a bush, and on a bush
 // field's image within the 0.5 % an approximation on by default may move the mean.
+#include "bush_field.h"
 #include "fixtures.h"
 #include "../../render/src/near_shadow_table.h"
 
 #include <vtex/render/compare.h>
 #include <vtex/render/texel_march.h>
-#include <vtex/sampler/patterns.h>
-#include <vtex/sampler/sampler.h>
 
 #include <gtest/gtest.h>
 
@@ -19,16 +18,6 @@ using namespace vtex::render;
 using namespace vtex::render::test;
 
 namespace {
-
-std::shared_ptr<const vtex::octree::Octree> smallBush(int leaves, int resolution) {
-    vtex::sampler::PatternOptions pattern;
-    pattern.count = leaves;
-    vtex::sampler::SampleOptions sampling;
-    sampling.resolution = resolution;
-    vtex::NullProgress progress;
-    return std::make_shared<const vtex::octree::Octree>(vtex::octree::buildOctree(
-        vtex::sampler::sampleMesh(vtex::sampler::makePattern("bush", pattern), sampling, progress), {}, progress));
-}
 
 const Eigen::Vector3d kLight = Eigen::Vector3d(1, 0.5, 1).normalized();  // toward the light
 constexpr double kStretch = 0.5;  // four steps of the default lattice of 8 per tile
@@ -53,7 +42,7 @@ double marchFrom(const MarchVolume& volume, int level, const Eigen::Vector3d& p0
 // query's is shorter than the entry's by its share in its own voxel, taken off at the extinction
 // where the face's middle march ends: measured below.)
 TEST(NearShadowTable, IsTheMarchWhereItsEntriesWereMeasured) {
-    const MarchVolume volume(smallBush(400, 32));
+    const MarchVolume volume(makeBush(400, 32).tree);
     detail::NearShadowTable table;
     const int slot = table.slotFor(0, 0, kLight);
     std::mt19937 rng(5);
@@ -96,7 +85,7 @@ TEST(NearShadowTable, IsTheMarchWhereItsEntriesWereMeasured) {
 // 1.0009 (5), mean |difference| 0.011 (with 2×2 points a face: 0.995 and 0.021, the midpoint
 // rule's bias on a convex function). Bound: means within 0.5 %, mean difference 0.02.
 TEST(NearShadowTable, IsCloseToTheMarchOnAverageInABush) {
-    const MarchVolume volume(smallBush(2000, 64));
+    const MarchVolume volume(makeBush(2000, 64).tree);
     detail::NearShadowTable table;
     const int slot = table.slotFor(0, 0, kLight);
     std::mt19937 rng(8);
@@ -134,7 +123,7 @@ TEST(NearShadowTable, IsCloseToTheMarchOnAverageInABush) {
 TEST(NearShadowTable, MovesABushFieldsMeanByAtMostHalfAPercent) {
     Scene scene = baseScene(Eigen::Vector3d(2.2, -5.5, 4.0), Eigen::Vector3d(0.5, 0.5, 0.4), 40, 96);
     scene.lights[0].direction = -kLight;
-    const auto texel = addTexel(scene, smallBush(400, 64));
+    const auto texel = addTexel(scene, makeBush(400, 64).tree);
     scene.texels[texel].material.specular = Color::Zero();
     addSurface(scene, gridMesh(-1, -1, 2, 2, 0, 3), texel, 1.0);
     scene.surfaces.back().material.diffuse = Color(0.35, 0.28, 0.2);
