@@ -89,6 +89,17 @@ bool flatField(const PrimTable& prims, int surface, const std::vector<int>& surf
 
 }  // namespace
 
+bool oneSurfaceOnly(const PrimTable& prims) {
+    std::optional<int> surface;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        std::optional<Prim> scratch;
+        const Prim& prim = prims.at(i, scratch);
+        if (!prim.textured || (surface && *surface != prim.surface)) return false;
+        surface = prim.surface;
+    }
+    return surface.has_value();
+}
+
 std::vector<bool> floorTableCells(const PrimTable& prims, const CellAdjacency& adjacency,
                                   const std::vector<SurfaceRuntime>& surfaces, const std::vector<int>& nearSlots,
                                   std::size_t lights, const NearShadowTable& near) {

@@ -31,6 +31,7 @@
 #include "cell_adjacency.h"
 #include "frame.h"
 #include "light_cache.h"
+#include "march.h"
 #include "near_shadow_table.h"
 
 #include <algorithm>
@@ -50,28 +51,41 @@ public:
     static constexpr int kMaxLevel = 6;
     /// Grid points per voxel of the shadow level, along x and y.
     static constexpr int kPerVoxel = 4;
+    /// Levels with a volume table (64 × 64 × 65 points at 5, 1 MiB); finer queries take the near
+    /// table and the lattice.
+    static constexpr int kMaxVolumeLevel = 5;
     /// The longest reach of the line across the field, in cells along x or y: a lower light
     /// walks its rays.
     static constexpr double kMaxReach = 4;
 
     /// One table per slot of `slots` (NearShadowTable's: a texel and a reference-space light
     /// direction), its levels allocated on first use.
-    explicit FloorShadowTable(std::size_t slots) : mLevels(slots) {
+    explicit FloorShadowTable(std::size_t slots) : mLevels(slots), mVolume(slots) {
         for (auto& s : mLevels)
+            for (auto& l : s) l.store(nullptr);
+        for (auto& s : mVolume)
             for (auto& l : s) l.store(nullptr);
     }
     ~FloorShadowTable() {
         for (auto& s : mLevels)
+            for (auto& l : s) delete[] l.load();
+        for (auto& s : mVolume)
             for (auto& l : s) delete[] l.load();
     }
     FloorShadowTable(const FloorShadowTable&) = delete;
     FloorShadowTable& operator=(const FloorShadowTable&) = delete;
 
     static constexpr std::uint32_t side(int level) { return std::uint32_t(kPerVoxel) << level; }
-    /// The memory one light's tables may take at most (NearShadowTable::kMaxSlotsPerLight slots).
+    /// The memory one light's floor tables may take at most (NearShadowTable::kMaxSlotsPerLight
+    /// slots), and its volume tables.
     static constexpr std::uint64_t kBytesPerLight = [] {
         std::uint64_t points = 0;
         for (int l = 0; l <= kMaxLevel; ++l) points += (std::uint64_t(kPerVoxel) << l) * (std::uint64_t(kPerVoxel) << l);
+        return std::uint64_t(NearShadowTable::kMaxSlotsPerLight) * points * sizeof(float);
+    }();
+    static constexpr std::uint64_t kVolumeBytesPerLight = [] {
+        std::uint64_t points = 0;
+        for (int l = 0; l <= kMaxVolumeLevel; ++l) points += (std::uint64_t(2) << l) * (std::uint64_t(2) << l) * ((std::uint64_t(2) << l) + 1);
         return std::uint64_t(NearShadowTable::kMaxSlotsPerLight) * points * sizeof(float);
     }();
 
@@ -104,6 +118,60 @@ public:
                           wx * wy * at(i1, j1)));
     }
 
+    /// The transmittance toward the light from p0 (tiled reference space, inside the shell) of a
+    /// cell of a field with nothing above it: the query's own voxel of `grid` (level `level`)
+    /// exactly, up to the face it leaves by (as NearShadowTable takes it: a lit voxel's own density
+    /// is what its query must see exactly), times the line's from there to the top: its optical
+    /// depth from a 3-D table of 2 points a voxel along x, y and z over the tile (periodic in x and
+    /// y), each the march from the point to z = 1 on first use, interpolated trilinearly.
+    double inside(int slot, const MarchVolume& volume, const LevelGrid& grid, double tau, int level, const Vec3& lr,
+                  const Vec3& p0) const {
+        const double n = double(grid.n), invN = 1 / n;
+        const Vec3 p = p0 + (1e-7 * invN) * lr;  // located a hair along the ray, as the march does
+        double f[3];
+        double exit = std::numeric_limits<double>::infinity();
+        for (int a = 0; a < 3; ++a) {
+            f[a] = clampedFloor(p[a] * n);
+            if (lr[a] != 0) exit = std::min(exit, ((lr[a] > 0 ? f[a] + 1 : f[a]) * invN - p0[a]) / lr[a]);
+        }
+        exit = std::max(exit, 0.0);
+        const std::uint32_t mask = grid.n - 1;
+        const std::uint32_t cell = grid.cell(std::uint32_t(std::int64_t(f[0]) & mask), std::uint32_t(std::int64_t(f[1]) & mask),
+                                             std::uint32_t(std::clamp(f[2], 0.0, n - 1)));
+        const double own = cell & LevelGrid::kEmpty ? 0.0
+                                                     : tau * double(grid.voxels[cell].density) * grid.voxels[cell].s.projectedArea(lr) *
+                                                           exit * ProfileFactor(volume, level, p0, lr)(0, exit);
+        const Vec3 q = p0 + exit * lr;
+        if (q.z() >= 1) return std::exp(-own);
+        const std::uint32_t m = 2u << level;
+        std::atomic<float>* values =
+            claimNanBlock(mVolume[std::size_t(slot)][std::size_t(level)], std::size_t(m) * m * (m + 1));
+        const auto at = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+            const auto x = std::uint32_t(i & std::int64_t(m - 1)), y = std::uint32_t(j & std::int64_t(m - 1));
+            const auto z = std::uint32_t(std::clamp<std::int64_t>(k, 0, m));
+            std::atomic<float>& v = values[(std::size_t(z) * m + y) * m + x];
+            float depth = v.load(std::memory_order_relaxed);
+            if (std::isnan(depth)) {
+                const Vec3 from(double(x) / m, double(y) / m, double(z) / m);
+                const double t = marchTransmittance(volume, tau, from, from + ((1 - from.z()) / lr.z()) * lr, level, kCutoff)
+                                     .transmittance;
+                depth = float(-std::log(std::max(t, kCutoff)));
+                v.store(depth, std::memory_order_relaxed);
+            }
+            return double(depth);
+        };
+        const double gx = q.x() * m, gy = q.y() * m, gz = std::max(q.z(), 0.0) * m;
+        const double fx = clampedFloor(gx), fy = clampedFloor(gy), fz = std::min(clampedFloor(gz), double(m - 1));
+        const double w[3] = {gx - fx, gy - fy, gz - fz};
+        const auto i = std::int64_t(fx), j = std::int64_t(fy), k = std::int64_t(fz);
+        double depth = 0;
+        for (int c = 0; c < 8; ++c) {
+            const double weight = (c & 1 ? w[0] : 1 - w[0]) * (c & 2 ? w[1] : 1 - w[1]) * (c & 4 ? w[2] : 1 - w[2]);
+            if (weight > 0) depth += weight * at(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+        }
+        return std::exp(-(own + depth));
+    }
+
     /// The exact value the table interpolates: the march from (x, y, 0) along lr to z = 1.
     static double lineTransmittance(const MarchVolume& volume, double tau, int level, const Vec3& lr, double x,
                                     double y) {
@@ -115,7 +183,12 @@ public:
 
 private:
     mutable std::vector<std::array<std::atomic<std::atomic<float>*>, kMaxLevel + 1>> mLevels;
+    mutable std::vector<std::array<std::atomic<std::atomic<float>*>, kMaxVolumeLevel + 1>> mVolume;
 };
+
+/// Whether every primitive of `prims` is a cell of one surface: then nothing lies above a field's
+/// shells, and a query that reaches the top has reached the light (FloorShadowTable::inside).
+bool oneSurfaceOnly(const PrimTable& prims);
 
 /// Per primitive and lattice slot (`lights` of them, primitive-major, as `nearSlots`), whether a
 /// floor point of that cell may take the floor table: see the file's comment.

@@ -39,6 +39,7 @@ ApproximationBudget ApproximationBudget::exact() {
     b.lightingReuseWeight = 0;
     b.exactFloorShadowAbove = 0;
     b.floorShadowTable = false;
+    b.fieldShadowVolume = false;
     b.shadowRefresh = 1;
     return b;
 }
@@ -51,7 +52,8 @@ std::string ApproximationBudget::key() const {
     k << "share_shadow_rays " << shareShadowRays << " shadow_cache_resolution " << shadowCacheResolution
       << " chain_lattice_nodes " << chainLatticeNodes << " near_shadow_table " << nearShadowTable << " blend_cutoff "
       << blendCutoff << " lighting_reuse_weight " << lightingReuseWeight << " exact_floor_shadow_above "
-      << exactFloorShadowAbove << " floor_shadow_table " << floorShadowTable << " shadow_refresh " << shadowRefresh;
+      << exactFloorShadowAbove << " floor_shadow_table " << floorShadowTable << " field_shadow_volume " << fieldShadowVolume
+      << " shadow_refresh " << shadowRefresh;
     return k.str();
 }
 
@@ -320,7 +322,8 @@ std::uint64_t latticeMemoryCap(const Scene& scene, const RenderOptions& options)
                                                     [](const Light& l) { return l.type == LightType::Directional; }));
     if (lights == 0 || usedTexels(scene).empty()) return 0;
     const std::uint64_t tables = (options.approximations.nearShadowTable ? lights * detail::NearShadowTable::kBytesPerLight : 0) +
-                                 (options.approximations.floorShadowTable ? lights * detail::FloorShadowTable::kBytesPerLight : 0);
+                                 (options.approximations.floorShadowTable ? lights * detail::FloorShadowTable::kBytesPerLight : 0) +
+                                 (options.approximations.fieldShadowVolume ? lights * detail::FloorShadowTable::kVolumeBytesPerLight : 0);
     return std::uint64_t(detail::LightTransmittanceCache::kMaxNodes) * sizeof(float) + tables;
 }
 

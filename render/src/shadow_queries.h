@@ -93,6 +93,14 @@ public:
         }
         const int level =
             span && span->level >= 0 ? span->level : shadowLevel(texel, width / (span ? span->scale : localScale(prim, r)));
+        // A flat field with nothing above it: the query's own voxel and a look-up of the rest.
+        if (mFieldAlone && level <= FloorShadowTable::kMaxVolumeLevel &&
+            mFloorCells[std::size_t(primIndex) * mLightCache.lights() + std::size_t(slot)]) {
+            const int table = mNearSlots[std::size_t(primIndex) * mLightCache.lights() + std::size_t(slot)];
+            if (const LevelGrid* grid = texel.volume->grid(level))
+                return mFloorTable.inside(table, *texel.volume, *grid, texel.tauAt(level), level, mNearTable.slot(table).lr,
+                                          tile(r, prim));
+        }
         const double maxStep = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
         const CellSegment near = segmentInCell(prim, r, lr, maxStep);
         if (near.exitFace == 0) return 0;  // the base surface blocks
@@ -244,7 +252,7 @@ public:
     // the shell's top), otherwise the exact ray (shadowTransmittance without a hint).
     double floorShadow(const Prim& prim, const Vec3& r, const Vec3& o, const Vec3& l, double tMax, double width,
                        Counters& counters) const {
-        const int slot = mFloorCells.empty() ? -1 : latticeSlot(l, tMax, prim.index);
+        const int slot = mFloorCells.empty() || !mOptions.approximations.floorShadowTable ? -1 : latticeSlot(l, tMax, prim.index);
         if (slot >= 0 && mFloorCells[std::size_t(prim.index) * mLightCache.lights() + std::size_t(slot)]) {
             const TexelRuntime& texel = mTexels[std::size_t(mSurfaces[std::size_t(prim.surface)].texel)];
             const LevelChoice choice = chooseLevel(width / localScale(prim, r), mOptions.lodBias, texel.volume->maxLevel());
@@ -351,7 +359,8 @@ private:
     // texel, by texel and reference-space light direction at the cell's centre. The floor tables
     // take the same slots.
     std::vector<int> makeNearSlots() {
-        if (mLightCache.empty() || !(mOptions.approximations.nearShadowTable || mOptions.approximations.floorShadowTable))
+        const ApproximationBudget& a = mOptions.approximations;
+        if (mLightCache.empty() || !(a.nearShadowTable || a.floorShadowTable || a.fieldShadowVolume))
             return {};
         const std::size_t lights = mLightCache.lights();
         std::vector<int> slots(mTracer.prims().size() * lights, -1);
@@ -408,12 +417,15 @@ private:
     NearShadowTable mNearTable;
     // Per primitive and lattice slot, the near table's slot (−1: march); empty: no tables.
     std::vector<int> mNearSlots = makeNearSlots();
-    // Per primitive and lattice slot, whether its floor takes the floor table; empty: none does.
-    std::vector<bool> mFloorCells = mOptions.approximations.floorShadowTable
+    // Per primitive and lattice slot, whether its floor takes the floor table (and its voxels the
+    // volume table, in a scene of that field alone); empty: none does.
+    std::vector<bool> mFloorCells = mOptions.approximations.floorShadowTable || mOptions.approximations.fieldShadowVolume
                                         ? floorTableCells(mTracer.prims(), mAdjacency, mSurfaces, mNearSlots,
                                                           mLightCache.lights(), mNearTable)
                                         : std::vector<bool>{};
     FloorShadowTable mFloorTable{mNearTable.slots()};
+    // Whether voxel queries in the floor table's cells take its volume table: a scene of one field.
+    bool mFieldAlone = mOptions.approximations.fieldShadowVolume && !mFloorCells.empty() && oneSurfaceOnly(mTracer.prims());
     mutable std::atomic<bool> mChainCut{false};
 };
 

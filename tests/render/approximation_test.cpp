@@ -27,9 +27,10 @@ TEST(Approximations, ExactTurnsEveryOneOffAndTheKeyNamesEveryValue) {
     EXPECT_EQ(exact.lightingReuseWeight, 0.0);
     EXPECT_EQ(exact.exactFloorShadowAbove, 0.0);
     EXPECT_FALSE(exact.floorShadowTable);
+    EXPECT_FALSE(exact.fieldShadowVolume);
     EXPECT_EQ(exact.shadowRefresh, 1.0);
     // Changing any one value changes the key (the pipeline's cache key is made from it).
-    std::vector<ApproximationBudget> variants(9);
+    std::vector<ApproximationBudget> variants(10);
     variants[0].shareShadowRays = false;
     variants[1].shadowCacheResolution = 16;
     variants[2].blendCutoff = 0.2;
@@ -39,6 +40,7 @@ TEST(Approximations, ExactTurnsEveryOneOffAndTheKeyNamesEveryValue) {
     variants[6].chainLatticeNodes = false;
     variants[7].nearShadowTable = false;
     variants[8].floorShadowTable = false;
+    variants[9].fieldShadowVolume = false;
     for (const auto& v : variants) EXPECT_NE(v.key(), ApproximationBudget{}.key());
 }
 

@@ -103,6 +103,11 @@ struct ApproximationBudget {
     /// from a table of the transmittance through the tiled texel (docs/render.md, "Shadows";
     /// FloorShadowTable) instead of an exact ray; false: every floor point casts its ray.
     bool floorShadowTable = true;
+    /// A camera march's shadow query in such a cell, in a scene with nothing but that field,
+    /// takes its own voxel exactly and the rest from a 3-D table of the tiled texel's optical
+    /// depth to the top (FloorShadowTable::inside) instead of the near table and the lattice;
+    /// false: those.
+    bool fieldShadowVolume = true;
     /// Along a march, a voxel takes a new shadow query once the march's transmittance has fallen
     /// below this fraction of what it was at the last query, and reuses the last one otherwise;
     /// in (0, 1]. 1 (the default): a query at every voxel that absorbs anything, exact. Below 1
