@@ -157,9 +157,10 @@ private:
     }
 
     // The base surface at cell coordinates r, seen through transmittance `seenThrough`. Its
-    // shadow rays are exact, except where it is seen through less than
-    // RenderOptions::exactFloorShadowAbove: there the cell's transmittance lattice answers (as it
-    // does for voxels), which moves the pixel by at most seenThrough × the floor's direct light.
+    // shadows (ShadowQueries::floorShadow): the floor table where its cell takes it; otherwise
+    // exact rays, except where it is seen through less than RenderOptions::exactFloorShadowAbove:
+    // there the cell's transmittance lattice answers (as it does for voxels), which moves the
+    // pixel by at most seenThrough × the floor's direct light.
     Color shadeFloor(const Prim& prim, const SurfaceRuntime& surface, const Vec3& r, const Vec3& d, double t,
                      double seenThrough, Counters& counters) const {
         const Vec3 x = prim.cell.map(Vec3(r.x(), r.y(), 0));
@@ -167,23 +168,20 @@ private:
         const Vec3 ng = geometricNormal(bottom, r.x(), r.y(), prim.n);
         const Vec3 n = shadingNormal(prim.n, r.x(), r.y(), ng);
         const double scale = std::min(surface.height, patchSize(prim));
-        // The hint, just above the floor where the lattice's near march starts inside the cell,
-        // is what lets a query use the lattice.
-        if (seenThrough < mOptions.approximations.exactFloorShadowAbove)
-            return shadeSurface(x, n, ng, -d, surface.material, scale, t, counters, &prim, Vec3(r.x(), r.y(), 1e-4));
+        const bool dim = seenThrough < mOptions.approximations.exactFloorShadowAbove;
         return detail::shadePhong(mScene.lights, x, n, ng, -d, surface.material, Color::Ones(), scale,
                                   [&](const Vec3& origin, const Vec3& l, double distance) {
-                                      return mShadows.floorShadow(prim, r, origin, l, distance, mConeSpread * t, counters);
+                                      return mShadows.floorShadow(prim, r, origin, l, distance, mConeSpread * t, dim, counters);
                                   });
     }
 
-    // An opaque surface point; its shadow queries start in cell `hint` at `hintR` when that is
-    // given (see shadowTransmittance).
+    // An opaque surface point: exact shadow rays.
     Color shadeSurface(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& view, const Material& m, double scale,
-                       double t, Counters& counters, const Prim* hint = nullptr, const Vec3& hintR = Vec3::Zero()) const {
+                       double t, Counters& counters) const {
         return detail::shadePhong(mScene.lights, x, n, ng, view, m, Color::Ones(), scale,
                                   [&](const Vec3& origin, const Vec3& l, double distance) {
-                                      return mShadows.shadowTransmittance(origin, l, distance, mConeSpread * t, hint, hintR, counters);
+                                      return mShadows.shadowTransmittance(origin, l, distance, mConeSpread * t, nullptr,
+                                                                          Vec3::Zero(), counters);
                                   });
     }
 

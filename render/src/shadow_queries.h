@@ -249,9 +249,11 @@ public:
     // A floor point's shadow: at cell coordinates r (w = 0) of `prim`, the shadow ray leaving
     // from o (world). The floor table where the cell may take it (FloorShadowTable: a flat
     // field's light lines through the tiled texel, then the exact walk from where the line leaves
-    // the shell's top), otherwise the exact ray (shadowTransmittance without a hint).
+    // the shell's top); otherwise, for a floor seen through less than exactFloorShadowAbove
+    // (`dim`), the cell's lattice from just above the floor (the hint is what lets a query use
+    // it), and else the exact ray.
     double floorShadow(const Prim& prim, const Vec3& r, const Vec3& o, const Vec3& l, double tMax, double width,
-                       Counters& counters) const {
+                       bool dim, Counters& counters) const {
         const int slot = mFloorCells.empty() || !mOptions.approximations.floorShadowTable ? -1 : latticeSlot(l, tMax, prim.index);
         if (slot >= 0 && mFloorCells[std::size_t(prim.index) * mLightCache.lights() + std::size_t(slot)]) {
             const TexelRuntime& texel = mTexels[std::size_t(mSurfaces[std::size_t(prim.surface)].texel)];
@@ -274,6 +276,7 @@ public:
                     return t * tracedShadow(o, l, tMax, width, -1, Vec3::Zero(), counters, false, (1 + 1e-9) / zRate);
             }
         }
+        if (dim) return shadowTransmittance(o, l, tMax, width, &prim, Vec3(r.x(), r.y(), 1e-4), counters);
         return shadowTransmittance(o, l, tMax, width, nullptr, Vec3::Zero(), counters);
     }
 
