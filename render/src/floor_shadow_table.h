@@ -20,6 +20,13 @@
 // its bounds are the tests FloorShadowTable.* (against the line in a bush, and against the exact
 // walk on a field of bushes under a plate) and, on the bush field, the image means.
 //
+// In a scene of that field alone, where a line that reaches the top has reached the light, the
+// camera marches' shadow queries in those cells take a 3-D table too (inside(): the query's own
+// voxel exactly, the line's depth beyond it at 2 points a voxel, trilinear) instead of the near
+// table and the lattice, which interpolate over a coarser lattice and march its nodes at the
+// lattice's level: on the bush field 5 times closer to exact shadow rays (docs/render.md, "Field
+// shadow volume").
+//
 // Which cells may use it is decided before any pixel (floorTableCells, floor_shadow_table.cpp):
 // those whose every cell the line can cross is a translate of them with the same table, with no
 // primitive of another surface inside the field's bounds. Values are computed on first use, each
