@@ -5,6 +5,7 @@
 #include <vtex/octree/octree.h>
 #include <vtex/octree/voxel.h>
 #include <vtex/render/renderer.h>
+#include <vtex/render/texel_march.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +14,7 @@
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -215,6 +217,33 @@ inline bool allFinite(const Image& image) {
     for (float v : image.rgba)
         if (!std::isfinite(v)) return false;
     return true;
+}
+
+/// How a shadow table agrees with the march it stands for at `queries` random points in the
+/// non-empty voxels of `grid` (where shadow queries come from: voxels that absorb): the mean of
+/// table(p) over the mean of march(p), and the mean |table(p) − march(p)|. march(p) is called
+/// first, so that it may leave what table(p) needs.
+struct TableAgreement {
+    double ratio = 0;
+    double meanDifference = 0;
+};
+template <class Table, class March>
+TableAgreement agreementInVoxels(const LevelGrid& grid, std::uint32_t seed, int queries, Table&& table, March&& march) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    double sumMarch = 0, sumTable = 0, sumDiff = 0;
+    for (int n = 0; n < queries;) {
+        const Eigen::Vector3d p0(u(rng), u(rng), u(rng));
+        if (grid.cell(std::uint32_t(p0.x() * grid.n), std::uint32_t(p0.y() * grid.n), std::uint32_t(p0.z() * grid.n)) &
+            LevelGrid::kEmpty)
+            continue;
+        const double m = march(p0), t = table(p0);
+        sumMarch += m;
+        sumTable += t;
+        sumDiff += std::abs(t - m);
+        ++n;
+    }
+    return {sumTable / sumMarch, sumDiff / queries};
 }
 
 }  // namespace vtex::render::test
