@@ -112,43 +112,23 @@ public:
         const double wx = wrap(x * n, i0), wy = wrap(y * n, j0);
         const std::uint32_t i1 = (i0 + 1) & (n - 1), j1 = (j0 + 1) & (n - 1);
         const auto at = [&](std::uint32_t i, std::uint32_t j) {
-            std::atomic<float>& v = values[std::size_t(j) * n + i];
-            float t = v.load(std::memory_order_relaxed);
-            if (std::isnan(t)) {
-                const double line = lineTransmittance(volume, tau, level, lr, double(i) / n, double(j) / n);
-                t = float(-std::log(std::max(line, kCutoff)));
-                v.store(t, std::memory_order_relaxed);
-            }
-            return double(t);
+            return lineDepth(values[std::size_t(j) * n + i], volume, tau, level, lr, Vec3(double(i) / n, double(j) / n, 0));
         };
         return std::exp(-((1 - wx) * (1 - wy) * at(i0, j0) + wx * (1 - wy) * at(i1, j0) + (1 - wx) * wy * at(i0, j1) +
                           wx * wy * at(i1, j1)));
     }
 
     /// The transmittance toward the light from p0 (tiled reference space, inside the shell) of a
-    /// cell of a field with nothing above it: the query's own voxel of `grid` (level `level`)
-    /// exactly, up to the face it leaves by (as NearShadowTable takes it: a lit voxel's own density
-    /// is what its query must see exactly), times the line's from there to the top: its optical
+    /// cell of a field with nothing above it (`inverse`: lr's per-component reciprocal): the
+    /// query's own voxel of `grid` (level `level`) exactly (ownVoxel, as the near table takes it),
+    /// times the line's from where it leaves that voxel to the top: its optical
     /// depth from a 3-D table of 2 points a voxel along x, y and z over the tile (periodic in x and
     /// y), each the march from the point to z = 1 on first use, interpolated trilinearly.
     double inside(int slot, const MarchVolume& volume, const LevelGrid& grid, double tau, int level, const Vec3& lr,
-                  const Vec3& p0) const {
-        const double n = double(grid.n), invN = 1 / n;
-        const Vec3 p = p0 + (1e-7 * invN) * lr;  // located a hair along the ray, as the march does
-        double f[3];
-        double exit = std::numeric_limits<double>::infinity();
-        for (int a = 0; a < 3; ++a) {
-            f[a] = clampedFloor(p[a] * n);
-            if (lr[a] != 0) exit = std::min(exit, ((lr[a] > 0 ? f[a] + 1 : f[a]) * invN - p0[a]) / lr[a]);
-        }
-        exit = std::max(exit, 0.0);
-        const std::uint32_t mask = grid.n - 1;
-        const std::uint32_t cell = grid.cell(std::uint32_t(std::int64_t(f[0]) & mask), std::uint32_t(std::int64_t(f[1]) & mask),
-                                             std::uint32_t(std::clamp(f[2], 0.0, n - 1)));
-        const double own = cell & LevelGrid::kEmpty ? 0.0
-                                                     : tau * double(grid.voxels[cell].density) * grid.voxels[cell].s.projectedArea(lr) *
-                                                           exit * ProfileFactor(volume, level, p0, lr)(0, exit);
-        const Vec3 q = p0 + exit * lr;
+                  const Vec3& inverse, const Vec3& p0) const {
+        const OwnVoxel o = ownVoxel(volume, grid, tau, level, p0, lr, inverse, std::numeric_limits<double>::infinity());
+        const double own = o.depth;
+        const Vec3 q = p0 + o.exit * lr;
         if (q.z() >= 1) return std::exp(-own);
         const std::uint32_t m = 2u << level;
         std::atomic<float>* values =
@@ -156,16 +136,8 @@ public:
         const auto at = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
             const auto x = std::uint32_t(i & std::int64_t(m - 1)), y = std::uint32_t(j & std::int64_t(m - 1));
             const auto z = std::uint32_t(std::clamp<std::int64_t>(k, 0, m));
-            std::atomic<float>& v = values[(std::size_t(z) * m + y) * m + x];
-            float depth = v.load(std::memory_order_relaxed);
-            if (std::isnan(depth)) {
-                const Vec3 from(double(x) / m, double(y) / m, double(z) / m);
-                const double t = marchTransmittance(volume, tau, from, from + ((1 - from.z()) / lr.z()) * lr, level, kCutoff)
-                                     .transmittance;
-                depth = float(-std::log(std::max(t, kCutoff)));
-                v.store(depth, std::memory_order_relaxed);
-            }
-            return double(depth);
+            return lineDepth(values[(std::size_t(z) * m + y) * m + x], volume, tau, level, lr,
+                             Vec3(double(x) / m, double(y) / m, double(z) / m));
         };
         const double gx = q.x() * m, gy = q.y() * m, gz = std::max(q.z(), 0.0) * m;
         const double fx = clampedFloor(gx), fy = clampedFloor(gy), fz = std::min(clampedFloor(gz), double(m - 1));
@@ -179,16 +151,27 @@ public:
         return std::exp(-(own + depth));
     }
 
-    /// The exact value the table interpolates: the march from (x, y, 0) along lr to z = 1.
-    static double lineTransmittance(const MarchVolume& volume, double tau, int level, const Vec3& lr, double x,
-                                    double y) {
-        const Vec3 from(x, y, 0);
-        return marchTransmittance(volume, tau, from, from + (1 / lr.z()) * lr, level, kCutoff).transmittance;
+    /// The exact value both tables interpolate: the march from `from` (tiled reference space, in
+    /// the shell) along lr to z = 1.
+    static double lineTransmittance(const MarchVolume& volume, double tau, int level, const Vec3& lr, const Vec3& from) {
+        return marchTransmittance(volume, tau, from, from + ((1 - from.z()) / lr.z()) * lr, level, kCutoff).transmittance;
     }
     /// Below this a line is dark: the march stops (the exact walk's cut-off).
     static constexpr double kCutoff = 1e-4;
 
 private:
+    /// A table's entry: the optical depth of the line from `from`, marched the first time it is
+    /// asked for (NaN until then; whichever thread marches it writes the same value).
+    static double lineDepth(std::atomic<float>& entry, const MarchVolume& volume, double tau, int level, const Vec3& lr,
+                            const Vec3& from) {
+        float depth = entry.load(std::memory_order_relaxed);
+        if (std::isnan(depth)) {
+            depth = float(-std::log(std::max(lineTransmittance(volume, tau, level, lr, from), kCutoff)));
+            entry.store(depth, std::memory_order_relaxed);
+        }
+        return double(depth);
+    }
+
     mutable std::vector<std::array<std::atomic<std::atomic<float>*>, kMaxLevel + 1>> mLevels;
     mutable std::vector<std::array<std::atomic<std::atomic<float>*>, kMaxVolumeLevel + 1>> mVolume;
 };

@@ -40,6 +40,46 @@
 
 namespace vtex::render::detail {
 
+/// A shadow query's share in the voxel of `grid` (level `level`) it starts in: from p0 (tiled
+/// reference space) along lr (unit; `inverse` its per-component reciprocal) to the face it leaves
+/// by, at most maxStep. The near shadow table and the field's volume table both take it exactly:
+/// a lit voxel's own density is what its query must see exactly.
+struct OwnVoxel {
+    double exit = 0;      ///< how far along lr the query leaves its voxel, in [0, maxStep]
+    int face = -1;        ///< the axis of the face it leaves by (−1: lr is 0)
+    double f[3] = {};     ///< the voxel's coordinates, unwrapped
+    std::uint32_t idx[3] = {};  ///< the voxel in the grid
+    double depth = 0;     ///< the optical depth over [0, exit]
+};
+inline OwnVoxel ownVoxel(const MarchVolume& volume, const LevelGrid& grid, double tau, int level, const Vec3& p0,
+                         const Vec3& lr, const Vec3& inverse, double maxStep) {
+    OwnVoxel o;
+    const double n = double(grid.n), invN = 1 / n;
+    // Located a hair along the ray, as the march locates a point on a voxel face.
+    const Vec3 p = p0 + (1e-7 * invN) * lr;
+    double exit = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        o.f[a] = clampedFloor(p[a] * n);
+        if (lr[a] == 0) continue;
+        const double e = ((lr[a] > 0 ? o.f[a] + 1 : o.f[a]) * invN - p0[a]) * inverse[a];
+        if (e < exit) {
+            exit = e;
+            o.face = a;
+        }
+    }
+    const std::uint32_t mask = grid.n - 1;
+    o.idx[0] = std::uint32_t(std::int64_t(o.f[0]) & mask);
+    o.idx[1] = std::uint32_t(std::int64_t(o.f[1]) & mask);
+    o.idx[2] = std::uint32_t(std::clamp(o.f[2], 0.0, n - 1));
+    o.exit = std::clamp(exit, 0.0, maxStep);
+    const std::uint32_t cell = grid.cell(o.idx[0], o.idx[1], o.idx[2]);
+    if (!(cell & LevelGrid::kEmpty)) {
+        const GridVoxel& v = grid.voxels[cell];
+        o.depth = tau * double(v.density) * v.s.projectedArea(lr) * o.exit * ProfileFactor(volume, level, p0, lr)(0, o.exit);
+    }
+    return o;
+}
+
 class NearShadowTable {
 public:
     static constexpr int kMaxLevel = 5;
@@ -116,35 +156,15 @@ public:
     double transmittance(int slotIndex, const MarchVolume& volume, const LevelGrid& grid, double tau, int level,
                          const Vec3& p0, double step, double maxStep) const {
         const Slot& s = slot(slotIndex);
-        const double n = double(grid.n), invN = 1 / n;
-        // Located a hair along the ray, as the march locates a point on a voxel face.
-        const Vec3 p = p0 + (1e-7 * invN) * s.lr;
-        double f[3];
-        double exit = std::numeric_limits<double>::infinity();
-        int face = -1;
-        for (int a = 0; a < 3; ++a) {
-            f[a] = clampedFloor(p[a] * n);
-            if (s.lr[a] == 0) continue;
-            const double e = ((s.lr[a] > 0 ? f[a] + 1 : f[a]) * invN - p0[a]) * s.inverse[a];
-            if (e < exit) {
-                exit = e;
-                face = a;
-            }
-        }
-        const std::uint32_t mask = grid.n - 1;
-        const std::uint32_t idx[3] = {std::uint32_t(std::int64_t(f[0]) & mask), std::uint32_t(std::int64_t(f[1]) & mask),
-                                      std::uint32_t(std::clamp(f[2], 0.0, n - 1))};
-        exit = std::clamp(exit, 0.0, step);
-        const std::uint32_t cell = grid.cell(idx[0], idx[1], idx[2]);
-        const double own = cell & LevelGrid::kEmpty ? 0.0
-                                                     : sigma(grid.voxels[cell], tau, s.lr) * exit *
-                                                           ProfileFactor(volume, level, p0, s.lr)(0, exit);
-        if (!(step > exit) || face < 0) return std::exp(-own);
+        const OwnVoxel o = ownVoxel(volume, grid, tau, level, p0, s.lr, s.inverse, step);
+        const double own = o.depth, exit = o.exit;
+        if (!(step > exit) || o.face < 0) return std::exp(-own);
         // The rest from where on the face the query leaves (fractions of the voxel along the
         // face's other two axes).
-        const int u = (face + 1) % 3, v = (face + 2) % 3;
-        const double fu = (p0[u] + exit * s.lr[u]) * n - f[u], fv = (p0[v] + exit * s.lr[v]) * n - f[v];
-        const Rest r = rest(s, volume, grid, tau, level, idx, face, step - exit, maxStep, fu, fv);
+        const double n = double(grid.n);
+        const int u = (o.face + 1) % 3, v = (o.face + 2) % 3;
+        const double fu = (p0[u] + exit * s.lr[u]) * n - o.f[u], fv = (p0[v] + exit * s.lr[v]) * n - o.f[v];
+        const Rest r = rest(s, volume, grid, tau, level, o.idx, o.face, step - exit, maxStep, fu, fv);
         // exp(−own) · clamp(t · exp(−depth), 0, 1), with one exponential where the clamp cannot
         // act: t · e^(−depth) ≤ 1 when t ≤ 1 and depth ≥ 0, or t ≤ 1 + depth ≤ e^depth.
         if (!(r.t > 0)) return 0;

@@ -99,7 +99,7 @@ public:
             const int table = mNearSlots[std::size_t(primIndex) * mLightCache.lights() + std::size_t(slot)];
             if (const LevelGrid* grid = texel.volume->grid(level))
                 return mFloorTable.inside(table, *texel.volume, *grid, texel.tauAt(level), level, mNearTable.slot(table).lr,
-                                          tile(r, prim));
+                                          mNearTable.slot(table).inverse, tile(r, prim));
         }
         const double maxStep = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
         const CellSegment near = segmentInCell(prim, r, lr, maxStep);

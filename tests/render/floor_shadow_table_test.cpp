@@ -43,7 +43,7 @@ TEST(FloorShadowTable, IsTheLineAtItsPointsAndCloseBetween) {
         double worstAtPoints = 0;
         for (int q = 0; q < 500; ++q) {
             const double x = std::floor(u(rng) * n) / n, y = std::floor(u(rng) * n) / n;
-            const double line = detail::FloorShadowTable::lineTransmittance(volume, 1.0, level, kLight, x, y);
+            const double line = detail::FloorShadowTable::lineTransmittance(volume, 1.0, level, kLight, Eigen::Vector3d(x, y, 0));
             const double fromTable = table.transmittance(0, volume, 1.0, level, kLight, x + 3, y - 2);  // tiles repeat
             if (line > 1e-3) worstAtPoints = std::max(worstAtPoints, std::abs(fromTable / line - 1));
         }
@@ -52,7 +52,7 @@ TEST(FloorShadowTable, IsTheLineAtItsPointsAndCloseBetween) {
         constexpr int kQueries = 20000;
         for (int q = 0; q < kQueries; ++q) {
             const double x = u(rng), y = u(rng);
-            const double line = detail::FloorShadowTable::lineTransmittance(volume, 1.0, level, kLight, x, y);
+            const double line = detail::FloorShadowTable::lineTransmittance(volume, 1.0, level, kLight, Eigen::Vector3d(x, y, 0));
             const double fromTable = table.transmittance(0, volume, 1.0, level, kLight, x, y);
             sumLine += line;
             sumTable += fromTable;
@@ -78,7 +78,7 @@ TEST(FloorShadowTable, InsideIsCloseToTheMarchToTheTop) {
     for (const int level : {4, 5}) {
         const LevelGrid& grid = *volume.grid(level);
         const TableAgreement a = agreementInVoxels(
-            grid, 12, 20000, [&](const Eigen::Vector3d& p0) { return table.inside(0, volume, grid, 1.0, level, kLight, p0); },
+            grid, 12, 20000, [&](const Eigen::Vector3d& p0) { return table.inside(0, volume, grid, 1.0, level, kLight, kLight.cwiseInverse(), p0); },
             [&](const Eigen::Vector3d& p0) {
                 return marchTransmittance(volume, 1.0, p0, p0 + ((1 - p0.z()) / kLight.z()) * kLight, level, 1e-6)
                     .transmittance;
