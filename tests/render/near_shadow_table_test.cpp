@@ -116,6 +116,8 @@ TEST(NearShadowTable, MovesABushFieldsMeanByAtMostHalfAPercent) {
     addSurface(scene, gridMesh(-1, -1, 2, 2, 0, 3), texel, 1.0);
     scene.surfaces.back().material.diffuse = Color(0.35, 0.28, 0.2);
     RenderOptions options;
+    // The field is the scene's only surface: its inner cells would take the volume table instead.
+    options.approximations.fieldShadowVolume = false;
     const RenderResult withTable = renderQuiet(scene, options);
     options.approximations.nearShadowTable = false;
     const RenderResult marched = renderQuiet(scene, options);
