@@ -134,7 +134,10 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
             run = voxel;
             runStart = s;
         }
-        const int a = next[0] <= next[1] ? (next[0] <= next[2] ? 0 : 2) : (next[1] <= next[2] ? 1 : 2);
+        // The axis whose plane comes first, without branches: which axis that is changes from step
+        // to step along a diagonal ray, where a conditional jump would be mispredicted often.
+        const int a01 = int(!(next[0] <= next[1]));
+        const int a = std::min(next[0], next[1]) <= next[2] ? a01 : 2;
         if (!voxel) {
             const std::int64_t d = cell & 0xFFu;
             if (d > 1) {
