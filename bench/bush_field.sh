@@ -10,7 +10,8 @@
 #   * every texel variant of VARIANTS ("name=args;name=args", e.g.
 #     VARIANTS="refresh1=--shadow-refresh 1;bias-0.5=--lod-bias -0.5"), at every view;
 # each row's RMSE, its 4×4-block and pixel-scale parts and its R, G, B bias against the truth
-# (`vtex reference` at TRUTH_SPP, near TRUTH_SPP_NEAR), its time against the two references' and
+# (`vtex reference` at TRUTH_SPP, near TRUTH_SPP_NEAR), its time against the two references' (the
+# median of the rounds' own ratios) and
 # against the reference's at equal error (on the reference's trend between its two rows, time ∝
 # RMSE^−b), and the issue's goals for the defaults as PASS/FAIL.
 # Optional: DENSE=1 also times far and mid with a 20 000-leaf bush sampled at 256³ (goal:
