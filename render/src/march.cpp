@@ -212,7 +212,7 @@ SegmentTransmittance marchTransmittance(const MarchVolume& volume, double tau, c
     const double maxDepth = cutoff > 0 ? -std::log(cutoff) : INFINITY;
     detail::ProfileFactor profile(volume, level, from, dir);
     out.blocks = detail::march(volume, level, from, dir, length, [&](const GridVoxel& voxel, double s, double ds) {
-        opticalDepth += tau * voxel.density * voxel.s.projectedArea(dir) * ds * profile(s, ds);
+        opticalDepth += voxel.extinction(tau, dir) * ds * profile(s, ds);
         return opticalDepth < maxDepth;
     });
     out.transmittance = std::exp(-opticalDepth);

@@ -75,7 +75,7 @@ inline OwnVoxel ownVoxel(const MarchVolume& volume, const LevelGrid& grid, doubl
     const std::uint32_t cell = grid.cell(o.idx[0], o.idx[1], o.idx[2]);
     if (!(cell & LevelGrid::kEmpty)) {
         const GridVoxel& v = grid.voxels[cell];
-        o.depth = tau * double(v.density) * v.s.projectedArea(lr) * o.exit * ProfileFactor(volume, level, p0, lr)(0, o.exit);
+        o.depth = v.extinction(tau, lr) * o.exit * ProfileFactor(volume, level, p0, lr)(0, o.exit);
     }
     return o;
 }
@@ -173,10 +173,6 @@ public:
     }
 
 private:
-    static double sigma(const GridVoxel& v, double tau, const Vec3& lr) {
-        return tau * double(v.density) * v.s.projectedArea(lr);
-    }
-
     // What rest() finds: the transmittance is t · exp(−depth), clamped to [0, 1].
     struct Rest {
         double t;      ///< the entry's marches interpolated where the query leaves
@@ -269,7 +265,7 @@ private:
                                                  std::uint32_t(std::int64_t(std::floor(end.y() * n)) & mask),
                                                  std::uint32_t(std::clamp(std::floor(end.z() * n), 0.0, n - 1)));
             // At a profiled level, the extinction at the end point's height.
-            if (!(cell & LevelGrid::kEmpty)) endSigma = sigma(grid.voxels[cell], tau, s.lr) * ProfileFactor(volume, level, end, s.lr)(0, 0);
+            if (!(cell & LevelGrid::kEmpty)) endSigma = grid.voxels[cell].extinction(tau, s.lr) * ProfileFactor(volume, level, end, s.lr)(0, 0);
         }
         values[0].store(float(endSigma), std::memory_order_relaxed);
         for (int k = kSide * kSide - 1; k >= 1; --k) values[1 + k].store(float(t[std::size_t(k)]), std::memory_order_relaxed);

@@ -154,7 +154,7 @@ SpanResult SpanMarcher::march(SpanContext& span, int level, bool record, double 
             // 1 − exp rather than expm1 (which takes 1.7× as long here): the opacity is only
             // added to and multiplied with quantities of order one, where its absolute error (an
             // ulp of 1) is what counts.
-            const double sigma = tau * double(voxel.density) * voxel.s.projectedArea(span.dir) * profile(s, ds);
+            const double sigma = voxel.extinction(tau, span.dir) * profile(s, ds);
             const double transmit = std::exp(-sigma * ds);
             const double alpha = 1 - transmit;
             if (!(alpha > 0)) return true;

@@ -52,6 +52,11 @@ struct GridVoxel {
     primitive::SggxMatrix s;
     float density = 0;  ///< ρ; 0 only for the empty sentinel
     std::array<float, 3> albedo{};
+
+    /// The extinction along the unit direction w, σ(w) = τ ρ √(wᵀSw) (the projected area of the
+    /// voxel's ellipsoid; DESIGN.md, "Rendering"): what every march of the voxel multiplies its
+    /// lengths by, camera and shadow alike.
+    double extinction(double tau, const Eigen::Vector3d& w) const { return tau * double(density) * s.projectedArea(w); }
 };
 GridVoxel gridVoxel(const octree::VoxelData& data);
 
