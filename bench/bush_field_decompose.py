@@ -7,10 +7,12 @@ bush.glb) three variants are made beside it:
   *_gcov  ground seen: no light, leaves black, the ground's ambient 1 (the fraction of ground the
           bushes let through);
   *_bl    lit ground: the leaves' diffuse 0 (black leaves);
+  *_lcov  leaves seen: no light, the ground black, the leaves' ambient 1 (their coverage, with
+          their albedo: what the lit leaves' bias is, less their lighting);
   *_bg    lit leaves: the ground's diffuse 0.
 Each variant's truth is `vtex reference --spp SPP` (cached as DIR/truth_VARIANT.exr, reused when
 present), the image and each variant are rendered with `vtex render ARGS...`, and one markdown row
-per view gives the bias (row mean / truth mean − 1) of R/G/B for the image, and of G for the three
+per view gives the bias (row mean / truth mean − 1) of R/G/B for the image, and of G for the four
 variants, and the image's RMSE against DIR/truth_VIEW.exr (bush_field.sh's truth).
 
 With BORDER=K in the environment, the ground seen and the lit ground are also split between the
@@ -36,6 +38,10 @@ def variant(text, name):
         text = re.sub(r'\[\[light\]\]\n(.*\n){3}', '', text)
         text = text.replace(LEAVES, LEAVES.replace('diffuse = [1, 1, 1]', 'diffuse = [0, 0, 0]'))
         return text.replace(GROUND, 'material  = { diffuse = [0, 0, 0], specular = [0, 0, 0], ambient = [1, 1, 1] }')
+    if name == 'lcov':
+        text = re.sub(r'\[\[light\]\]\n(.*\n){3}', '', text)
+        text = text.replace(GROUND, GROUND.replace('diffuse = [0.35, 0.28, 0.2]', 'diffuse = [0, 0, 0]'))
+        return text.replace(LEAVES, 'material = { diffuse = [0, 0, 0], specular = [0, 0, 0], ambient = [1, 1, 1] }')
     if name == 'bl':
         return text.replace(LEAVES, LEAVES.replace('diffuse = [1, 1, 1]', 'diffuse = [0, 0, 0]'))
     return text.replace(GROUND, GROUND.replace('diffuse = [0.35, 0.28, 0.2]', 'diffuse = [0, 0, 0]'))
@@ -95,13 +101,13 @@ def main():
     os.chdir(folder)
     if border is not None:
         split_ground(border)
-    print('| view | image R / G / B % | ground seen / lit ground / lit leaves (G) % | image RMSE |')
+    print('| view | image R / G / B % | ground seen / lit ground / leaves seen / lit leaves (G) % | image RMSE |')
     print('| --- | --- | --- | ---: |')
     for view in ('far', 'mid'):
         with open(view + '.toml') as f:
             text = f.read()
         biases = []
-        for name in ('gcov', 'bl', 'bg'):
+        for name in ('gcov', 'bl', 'lcov', 'bg'):
             scene = '%s_%s.toml' % (view, name)
             with open(scene, 'w') as f:
                 f.write(variant(text, name))
