@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Helper of bench/bush_field.sh (stdlib only). Run in the work directory.
 
-  bush_field.py plan WIDTH HEIGHT VARIANTS DENSE SWEEP
+  bush_field.py plan WIDTH HEIGHT VARIANTS DENSE SWEEP BEFORE
         write ground.obj, the scenes ({far,mid,near}.toml; {far,mid,near}_dense.toml with DENSE=1;
         sweep_NN.toml and sweep.txt with SWEEP=1) and rows.txt, the renders to time, one a line:
         section|view|name|spp|command|arguments
@@ -131,7 +131,7 @@ def parse_variants(text):
     return variants
 
 
-def plan(width, height, variants_text, dense, sweep):
+def plan(width, height, variants_text, dense, sweep, before):
     variants = parse_variants(variants_text)
     write_ground()
     rows = []
@@ -140,6 +140,9 @@ def plan(width, height, variants_text, dense, sweep):
         rows += [('main', view, 'ref1', 1, 'reference', '--spp 1'),
                  ('main', view, 'ref16', 16, 'reference', '--spp 16'),
                  ('main', view, 'texel', 1, 'render', '')]
+        # The older binary's texel (BEFORE), right after today's.
+        if before:
+            rows.append(('before', view, 'before', 1, 'render', ''))
         # The dense texel right after the sparse one: a round's two renders are seconds apart,
         # and the dense / sparse ratio is taken per round (dense_section).
         if dense:
@@ -268,7 +271,7 @@ def write_csv(rows, distances, truths):
 
 def label(r):
     what = {'ref1': 'reference 1 spp', 'ref16': 'reference 16 spp', 'texel': 'texel (defaults)',
-            'texel16': 'texel --spp 16'}.get(r['row'], '%s: `%s`' % (r['row'], r['args']))
+            'texel16': 'texel --spp 16', 'before': 'texel (defaults), BEFORE binary'}.get(r['row'], '%s: `%s`' % (r['row'], r['args']))
     return what
 
 
@@ -282,7 +285,7 @@ def main_table(rows, truths):
     out = ['| view | row | time s | × ref-16 | × ref-1 | RMSE | RMSE 4×4 | RMSE pixel | bias R / G / B % |',
            '| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |']
     for r in rows:
-        if r['section'] not in ('main', 'variant'):
+        if r['section'] not in ('main', 'before', 'variant'):
             continue
         out.append('| %s | %s | %.3f | %s | %s | %s | %s | %s | %s |' % (
             r['view'], label(r), r['wall_seconds'], fmt(r.get('time_vs_ref16'), '%.3g'),
@@ -307,7 +310,7 @@ def equal_error_section(rows):
     out = ['| view | row | RMSE | time s | reference at that RMSE s | texel / reference | b |',
            '| --- | --- | ---: | ---: | ---: | ---: | ---: |']
     for r in rows:
-        if r['section'] not in ('main', 'variant') or r['row'] in ('ref1', 'ref16') or r.get('rmse') is None:
+        if r['section'] not in ('main', 'before', 'variant') or r['row'] in ('ref1', 'ref16') or r.get('rmse') is None:
             continue
         one, sixteen = find(rows, r['view'], 'ref1'), find(rows, r['view'], 'ref16')
         if one is None or sixteen is None or not (one.get('rmse') or 0) > (sixteen.get('rmse') or 0) > 0:
@@ -422,8 +425,8 @@ def report(runs):
 
 
 if __name__ == '__main__':
-    if len(sys.argv) == 7 and sys.argv[1] == 'plan':
-        plan(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], sys.argv[5] == '1', sys.argv[6] == '1')
+    if len(sys.argv) == 8 and sys.argv[1] == 'plan':
+        plan(int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], sys.argv[5] == '1', sys.argv[6] == '1', sys.argv[7] == '1')
     elif len(sys.argv) == 6 and sys.argv[1] == 'truth-key':
         truth_key(*sys.argv[2:])
     elif len(sys.argv) == 3 and sys.argv[1] == 'report':

@@ -7,6 +7,8 @@
 # so load drift hits them alike), and reports the median `wall_seconds` of:
 #   * `vtex reference` at 1 and 16 spp;
 #   * `vtex render` with defaults, and at near also with --spp 16;
+#   * with BEFORE=VTEX_BINARY, `vtex render` with defaults by that (older) binary too, beside the
+#     texel row of every view: a change's before/after table from one run;
 #   * every texel variant of VARIANTS ("name=args;name=args", e.g.
 #     VARIANTS="refresh1=--shadow-refresh 1;bias-0.5=--lod-bias -0.5"), at every view;
 # each row's RMSE, its 4×4-block and pixel-scale parts and its R, G, B bias against the truth
@@ -26,7 +28,7 @@
 # Writes DIR/bush_field.md and DIR/bush_field.csv, and prints the markdown.
 # Usage: bench/bush_field.sh VTEX_BINARY [DIR] [RUNS] [THREADS]
 #   (environment: WIDTH, HEIGHT (768×576), TRUTH_SPP (1024), TRUTH_SPP_NEAR (256), RUNS,
-#    THREADS, VARIANTS, DENSE, SWEEP, SWEEP_TRUTH_SPP, TRUTH_KEY, COMPARE_VTEX, PATTERN (bush);
+#    THREADS, BEFORE, VARIANTS, DENSE, SWEEP, SWEEP_TRUTH_SPP, TRUTH_KEY, COMPARE_VTEX, PATTERN (bush);
 #    arguments win)
 set -eu
 VTEX=${1:?usage: bush_field.sh VTEX_BINARY [DIR] [RUNS] [THREADS]}
@@ -54,6 +56,8 @@ SWEEP=${SWEEP:-0}
 # measured; set it to a current build to measure an older one (a before/after table).
 COMPARE_VTEX=${COMPARE_VTEX:-$VTEX}
 case $COMPARE_VTEX in /*) ;; *) COMPARE_VTEX=$(pwd)/$COMPARE_VTEX ;; esac
+BEFORE=${BEFORE:-}
+case $BEFORE in /*|'') ;; *) BEFORE=$(pwd)/$BEFORE ;; esac
 HELPER=$(cd "$(dirname "$0")" && pwd)/bush_field.py
 START=$(date +%s)
 echo "start: $(uptime)"
@@ -69,7 +73,7 @@ if [ "$DENSE" = 1 ]; then
   "$VTEX" -q sample bush_dense.glb -o bush_dense.vtl --resolution 256
   "$VTEX" -q build bush_dense.vtl -o bush_dense.vto
 fi
-python3 "$HELPER" plan "$WIDTH" "$HEIGHT" "$VARIANTS" "$DENSE" "$SWEEP"
+python3 "$HELPER" plan "$WIDTH" "$HEIGHT" "$VARIANTS" "$DENSE" "$SWEEP" "$([ -n "$BEFORE" ] && echo 1 || echo 0)"
 
 # truth VIEW SPP [MESH]: truth_VIEW.exr → the cached truth/KEY.exr, rendered when missing
 truth() {
@@ -107,10 +111,12 @@ rm -f out/*.json
 round=1
 while [ $round -le "$RUNS" ]; do
   echo "round $round of $RUNS: $(uptime)"
-  while IFS='|' read -r _ view name _ command args; do
+  while IFS='|' read -r section view name _ command args; do
+    bin=$VTEX
+    if [ "$section" = before ]; then bin=$BEFORE; fi
     # $args unquoted on purpose: it is a list of flags.
     # shellcheck disable=SC2086
-    "$VTEX" -q "$command" "$view.toml" -o "out/$view.$name.exr" --stats "out/$view.$name.r$round.json" \
+    "$bin" -q "$command" "$view.toml" -o "out/$view.$name.exr" --stats "out/$view.$name.r$round.json" \
       --threads "$THREADS" $args < /dev/null
   done < rows.txt
   round=$((round + 1))
