@@ -78,9 +78,10 @@ def write_ground(n=GROUND, path='ground.obj'):
                 f.write('f %d %d %d %d\n' % (a, a + 1, a + n + 2, a + n + 1))
 
 
-def write_scene(path, position, width, height, bush='bush', mesh='ground.obj'):
+def write_scene(path, position, width, height, bush='bush', mesh='ground.obj', volume=None):
+    """`volume` (default: `bush`) names the .vto, `bush` the source mesh beside it."""
     with open(path, 'w') as f:
-        f.write(SCENE % (tuple(position) + LOOK_AT + (width, height, bush, bush, mesh)))
+        f.write(SCENE % (tuple(position) + LOOK_AT + (width, height, volume or bush, bush, mesh)))
 
 
 def grid(n, width, height):
@@ -140,8 +141,10 @@ def plan(width, height, variants_text, dense, sweep, before):
         rows += [('main', view, 'ref1', 1, 'reference', '--spp 1'),
                  ('main', view, 'ref16', 16, 'reference', '--spp 16'),
                  ('main', view, 'texel', 1, 'render', '')]
-        # The older binary's texel (BEFORE), right after today's.
+        # The older binary's texel (BEFORE), right after today's, from the texel that binary built
+        # (bush.before.vto: an older binary may not read what today's writes).
         if before:
+            write_scene(view + '.before.toml', CAMERAS[view], width, height, volume='bush.before')
             rows.append(('before', view, 'before', 1, 'render', ''))
         # The dense texel right after the sparse one: a round's two renders are seconds apart,
         # and the dense / sparse ratio is taken per round (dense_section).

@@ -8,7 +8,8 @@
 #   * `vtex reference` at 1 and 16 spp;
 #   * `vtex render` with defaults, and at near also with --spp 16;
 #   * with BEFORE=VTEX_BINARY, `vtex render` with defaults by that (older) binary too, beside the
-#     texel row of every view: a change's before/after table from one run;
+#     texel row of every view, on the texel that binary builds (bush.before.vto): a change's
+#     before/after table from one run;
 #   * every texel variant of VARIANTS ("name=args;name=args", e.g.
 #     VARIANTS="refresh1=--shadow-refresh 1;bias-0.5=--lod-bias -0.5"), at every view;
 # each row's RMSE, its 4×4-block and pixel-scale parts and its R, G, B bias against the truth
@@ -68,6 +69,7 @@ cd "$DIR"
 "$VTEX" -q pattern "$PATTERN" -o bush.glb
 "$VTEX" -q sample bush.glb -o bush.vtl --resolution 256
 "$VTEX" -q build bush.vtl -o bush.vto
+if [ -n "$BEFORE" ]; then "$BEFORE" -q build bush.vtl -o bush.before.vto; fi
 if [ "$DENSE" = 1 ]; then
   "$VTEX" -q pattern bush --leaves 20000 -o bush_dense.glb
   "$VTEX" -q sample bush_dense.glb -o bush_dense.vtl --resolution 256
@@ -112,11 +114,11 @@ round=1
 while [ $round -le "$RUNS" ]; do
   echo "round $round of $RUNS: $(uptime)"
   while IFS='|' read -r section view name _ command args; do
-    bin=$VTEX
-    if [ "$section" = before ]; then bin=$BEFORE; fi
+    bin=$VTEX scene=$view.toml
+    if [ "$section" = before ]; then bin=$BEFORE scene=$view.before.toml; fi
     # $args unquoted on purpose: it is a list of flags.
     # shellcheck disable=SC2086
-    "$bin" -q "$command" "$view.toml" -o "out/$view.$name.exr" --stats "out/$view.$name.r$round.json" \
+    "$bin" -q "$command" "$scene" -o "out/$view.$name.exr" --stats "out/$view.$name.r$round.json" \
       --threads "$THREADS" $args < /dev/null
   done < rows.txt
   round=$((round + 1))

@@ -34,6 +34,7 @@ Octree& Octree::operator=(const Octree& other) {
     levels = other.levels;
     stats = other.stats;
     measures = other.measures;
+    layerMeans = other.layerMeans;
     mBytesRead = other.bytesRead();
     mLoader.reset();
     return *this;
@@ -48,6 +49,7 @@ Octree& Octree::operator=(Octree&& other) {
     levels = std::move(other.levels);
     stats = std::move(other.stats);
     measures = std::move(other.measures);
+    layerMeans = std::move(other.layerMeans);
     mBytesRead = other.bytesRead();
     mLoader.reset();
     other.mLoader.reset();
@@ -58,7 +60,8 @@ Octree& Octree::operator=(Octree&& other) {
 bool operator==(const Octree& a, const Octree& b) {
     a.loadLevels(kAllLevels);
     b.loadLevels(kAllLevels);
-    return a.info == b.info && a.levels == b.levels && a.stats == b.stats && a.measures == b.measures;
+    return a.info == b.info && a.levels == b.levels && a.stats == b.stats && a.measures == b.measures &&
+           a.layerMeans == b.layerMeans;
 }
 
 void Octree::loadLevels(std::uint32_t level) const {
@@ -158,6 +161,7 @@ std::vector<detail::OutSection> vtoHeadAndStats(const Octree& octree) {
     }
     std::vector<detail::OutSection> out{{"HEAD", std::move(head.str())}, {"STAT", std::move(stats.str())}};
     if (octree.measures) out.push_back({"MEAS", detail::measuresBytes(*octree.measures)});
+    if (octree.layerMeans) out.push_back({"PROF", detail::layerMeansBytes(*octree.layerMeans)});
     return out;
 }
 
@@ -213,6 +217,7 @@ Octree parseVto(std::string_view bytes, const std::filesystem::path& file) {
     parseVtoStats(requireSection(sections, "STAT", file), tree, file);
     for (const InSection& section : sections)
         if (section.tag == "MEAS") tree.measures = parseVtoMeasures(section.payload, tree, file);
+        else if (section.tag == "PROF") tree.layerMeans = parseVtoLayerMeans(section.payload, tree, file);
     const std::uint32_t levelCount = tree.info.source.levels + 1;
     tree.levels.resize(levelCount);
     std::uint64_t expected = 1;  // nodes the level above announces

@@ -33,7 +33,7 @@ std::string levelTag(std::uint32_t l) {
 }
 
 bool isVtoSection(std::string_view tag) {
-    return tag == "HEAD" || tag == "STAT" || tag == "MEAS" ||
+    return tag == "HEAD" || tag == "STAT" || tag == "MEAS" || tag == "PROF" ||
            (tag.size() == 4 && tag.substr(0, 2) == "LV" && std::isdigit(static_cast<unsigned char>(tag[2])) &&
             std::isdigit(static_cast<unsigned char>(tag[3])));
 }
@@ -119,6 +119,33 @@ SourceMeasures parseVtoMeasures(std::string_view payload, const Octree& tree, co
         throw InputError(file, "a level beyond the tree's " + std::to_string(levelCount), where);
     if (!std::all_of(m.levelScales.begin(), m.levelScales.end(), [](double s) { return s > 0 && std::isfinite(s); }))
         throw InputError(file, "a level scale that is not positive and finite", where);
+    return m;
+}
+
+std::string layerMeansBytes(const LayerMeans& m) {
+    ByteWriter w;
+    w.u32(m.level);
+    for (const auto& axis : m.axis)
+        for (const double v : axis) w.f64(v);
+    return std::move(w.str());
+}
+
+LayerMeans parseVtoLayerMeans(std::string_view payload, const Octree& tree, const std::filesystem::path& file) {
+    const std::string where = sectionLocation("PROF");
+    ByteReader r(payload);
+    LayerMeans m;
+    m.level = r.u32();
+    // The level is checked before anything is allocated for it: 3 × 2^level values.
+    if (!r.ok() || m.level > tree.info.source.levels)
+        throw InputError(file, "a level beyond the tree's " + std::to_string(tree.info.source.levels + 1), where);
+    const std::uint64_t layers = std::uint64_t(1) << m.level;
+    if (r.remaining() != 3 * 8 * layers) throw InputError(file, "wrong size", where);
+    for (auto& axis : m.axis) {
+        axis.resize(std::size_t(layers));
+        for (double& v : axis) v = r.f64();
+        if (!std::all_of(axis.begin(), axis.end(), [](double v) { return v >= 0 && std::isfinite(v); }))
+            throw InputError(file, "a layer mean that is negative or not finite", where);
+    }
     return m;
 }
 
@@ -284,8 +311,10 @@ std::shared_ptr<const Octree> openVto(const std::filesystem::path& file) {
         else parseVtoStats(payload, *tree, file);
     }
     for (const TableEntry& entry : entries)
-        if (entry.tag == "MEAS") {
-            tree->measures = parseVtoMeasures(readSection(fd, entry, file), *tree, file);
+        if (entry.tag == "MEAS" || entry.tag == "PROF") {
+            const std::string payload = readSection(fd, entry, file);
+            if (entry.tag == "MEAS") tree->measures = parseVtoMeasures(payload, *tree, file);
+            else tree->layerMeans = parseVtoLayerMeans(payload, *tree, file);
             bytesRead += entry.size;
         }
     const std::uint32_t levelCount = tree->info.source.levels + 1;

@@ -22,7 +22,7 @@ inline constexpr std::string_view kVtoMagic{"VTEX.VTO", 8};
 
 /// "LV00" … "LV99".
 std::string levelTag(std::uint32_t level);
-/// HEAD, STAT, MEAS or LVnn.
+/// HEAD, STAT, MEAS, PROF or LVnn.
 bool isVtoSection(std::string_view tag);
 
 /// HEAD into tree.info, STAT into tree.stats (sized to the level count HEAD gives). Throw
@@ -35,6 +35,12 @@ void parseVtoStats(std::string_view payload, Octree& tree, const std::filesystem
 /// and the section.
 std::string measuresBytes(const SourceMeasures& m);
 SourceMeasures parseVtoMeasures(std::string_view payload, const Octree& tree, const std::filesystem::path& file);
+
+/// The PROF section (docs/formats.md): its payload for `m`, and `m` from a payload, checked
+/// against the tree's level count (HEAD parsed first). Throws vtex::InputError naming `file`
+/// and the section.
+std::string layerMeansBytes(const LayerMeans& m);
+LayerMeans parseVtoLayerMeans(std::string_view payload, const Octree& tree, const std::filesystem::path& file);
 
 /// Level `level`'s section into `nodes`, checked against tree.stats and against `expected`, the
 /// number of children the level above announces (1 for the root). Returns the number of

@@ -1,6 +1,7 @@
 // The .vtl and .vto files: bit-exact round trips; corruption, truncation and future versions
 // refused with the failing section named.
 #include <vtex/core/error.h>
+#include <vtex/octree/density_profile.h>
 #include <vtex/octree/octree.h>
 
 #include "../../octree/src/container.h"
@@ -239,6 +240,57 @@ TEST(VtoFormat, ImpossibleSourceMeasuresAreRefused) {
     } catch (const InputError& e) {
         EXPECT_EQ(e.location(), "section 'MEAS'");
     }
+}
+
+// The density profile's layer means (the PROF section): the build stores what the profile
+// would measure, they go through the file bit for bit by both readers, and checksummed but
+// impossible ones are refused naming the section.
+TEST(VtoFormat, StoredLayerMeansRoundTripAndImpossibleOnesAreRefused) {
+    Octree tree = smallOctree();
+    ASSERT_TRUE(tree.layerMeans);
+    EXPECT_EQ(*tree.layerMeans, measureLayerMeans(tree));
+    EXPECT_EQ(tree.layerMeans->level, tree.levelCount() - 1);  // levels 0–3: the profile level is the finest
+    const std::string bytes = serializeVto(tree);
+    const Octree back = parseVto(bytes, "mem.vto");
+    ASSERT_TRUE(back.layerMeans);
+    EXPECT_EQ(*back.layerMeans, *tree.layerMeans);
+    EXPECT_EQ(serializeVto(back), bytes);
+    const auto path = std::filesystem::path(VTEX_TEST_TMP) / "profiled.vto";
+    std::filesystem::create_directories(path.parent_path());
+    writeVto(tree, path);
+    ASSERT_TRUE(openVto(path)->layerMeans);
+    EXPECT_EQ(*openVto(path)->layerMeans, *tree.layerMeans);
+    Octree without = tree;
+    without.layerMeans.reset();
+    EXPECT_LT(serializeVto(without).size(), bytes.size());
+    EXPECT_FALSE(parseVto(serializeVto(without), "mem.vto").layerMeans);
+    expectAllCorruptionRefused(bytes, [](const std::string& b) { parseVto(b, "t.vto"); });
+
+    const auto refusal = [](const LayerMeans& m) {
+        Octree t = smallOctree();
+        t.layerMeans = m;
+        try {
+            parseVto(serializeVto(t), "bad.vto");
+        } catch (const InputError& e) {
+            return std::string(e.location()) + ": " + e.what();
+        }
+        return std::string("accepted");
+    };
+    const auto refusedAtProf = [&](const LayerMeans& m) { return refusal(m).find("section 'PROF'") == 0; };
+    LayerMeans m = *tree.layerMeans;
+    m.level = 4;  // the tree has levels 0–3
+    for (auto& axis : m.axis) axis.assign(16, 1.0);
+    EXPECT_TRUE(refusedAtProf(m)) << refusal(m);
+    m = *tree.layerMeans;
+    m.axis[2][1] = -0.5;
+    EXPECT_TRUE(refusedAtProf(m)) << refusal(m);
+    m = *tree.layerMeans;
+    m.axis[0][0] = std::numeric_limits<double>::infinity();
+    EXPECT_TRUE(refusedAtProf(m)) << refusal(m);
+    m = *tree.layerMeans;
+    m.level = 2;  // 8 values an axis where level 2 has 4
+    EXPECT_TRUE(refusedAtProf(m)) << refusal(m);
+    EXPECT_EQ(refusal(*tree.layerMeans), "accepted");
 }
 
 }  // namespace

@@ -70,12 +70,15 @@ TEST(LazyVto, ReadsTheHeaderAtOpenAndEachLevelOnFirstUseAndEndsWithTheSameTreeAs
     const std::string bytes = readBytes(path);
     const auto table = sectionTable(bytes);
     const auto lazy = openVto(path);
-    // At open: the header and table, HEAD and STAT, nothing of the levels.
+    // At open: the header and table, HEAD, STAT and PROF (the density profile's layer means,
+    // which the build stores), nothing of the levels.
     std::uint64_t expected = detail::kHeaderSize + detail::kTableEntrySize * table.size() + entryOf(table, "HEAD").size +
-                             entryOf(table, "STAT").size;
+                             entryOf(table, "STAT").size + entryOf(table, "PROF").size;
     EXPECT_EQ(lazy->bytesRead(), expected);
     EXPECT_EQ(lazy->info, built.info);
     EXPECT_EQ(lazy->stats, built.stats);
+    ASSERT_TRUE(lazy->layerMeans);
+    EXPECT_EQ(*lazy->layerMeans, *built.layerMeans);
     ASSERT_EQ(lazy->levelCount(), built.levelCount());
     for (const auto& level : lazy->levels) EXPECT_TRUE(level.empty());
     // Level 3 brings levels 0 … 3, each section's payload counted once; asking again reads nothing.

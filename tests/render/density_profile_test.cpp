@@ -15,6 +15,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <random>
@@ -140,6 +142,61 @@ TEST(DensityProfile, KeepsEachVoxelsMassAndPutsItWhereTheLayersHaveIt) {
     EXPECT_FALSE(DensityProfile(*slab(3)).profiles(1));
     EXPECT_FALSE(DensityProfile(*slab(2)).profiles(0));
     EXPECT_FALSE(DensityProfile().profiles(0));
+}
+
+// A compressed tree stores a uniform region as one leaf above the profile level, which stands
+// for every voxel below it: its profile must be that of the same texel stored voxel by voxel
+// (the box and the slab compress to leaves of levels 2–4 that span several layers and columns).
+TEST(DensityProfile, ACompressedTreeHasItsUncompressedTreesProfile) {
+    const auto boxAt = [](int x, int, int z) -> std::optional<vtex::octree::VoxelData> {
+        if (x < 16 || x >= 32 || z < 16 || z >= 32) return std::nullopt;
+        return sphereVoxel(2.0f);
+    };
+    const auto slabAt = [](int, int, int z) -> std::optional<vtex::octree::VoxelData> {
+        if (z < 16 || z >= 32) return std::nullopt;
+        return sphereVoxel(3.0f);
+    };
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-0.5, 1.5), h(0, 1);
+    for (const auto& at : {std::function<std::optional<vtex::octree::VoxelData>(int, int, int)>(boxAt),
+                           std::function<std::optional<vtex::octree::VoxelData>(int, int, int)>(slabAt)}) {
+        const auto plain = makeOctree(6, at), packed = makeOctree(6, at, true);
+        ASSERT_LT(packed->storedNodes(), plain->storedNodes() / 4);  // leaves above level 6 really stand in
+        const DensityProfile a(*plain), b(*packed);
+        for (int level = 0; level < 4; ++level)
+            for (int k = 0; k < 200; ++k) {
+                const vtex::octree::Vec3 from(u(rng), u(rng), h(rng)), to(u(rng), u(rng), h(rng));
+                EXPECT_NEAR(a.meanFactor(level, from, to), b.meanFactor(level, from, to), 1e-12) << level;
+            }
+    }
+}
+
+// The build stores the layer means the profile is made of (the .vto's PROF section): a tree
+// opened a level at a time then profiles its coarse levels without reading its level 6, and
+// the profile is the one measured from that level.
+TEST(DensityProfile, ATreeWithStoredLayerMeansIsProfiledWithoutReadingItsProfileLevel) {
+    const auto built = makeOctree(6, [](int x, int y, int z) {
+        return std::optional(sphereVoxel(float(1 + (x * 3 + y * 5 + z * 7) % 9)));
+    });
+    ASSERT_TRUE(built->layerMeans);
+    const auto path = std::filesystem::path(VTEX_TEST_TMP) / "stored_profile.vto";
+    std::filesystem::create_directories(path.parent_path());
+    vtex::octree::writeVto(*built, path);
+    const auto opened = vtex::octree::openVto(path);
+    const DensityProfile stored(*opened);
+    for (std::uint32_t l = 1; l < opened->levelCount(); ++l) EXPECT_TRUE(opened->levels[l].empty()) << l;
+    vtex::octree::Octree copy = *built;
+    copy.layerMeans.reset();
+    const DensityProfile measured(copy);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-0.5, 1.5), h(0, 1);
+    for (int level = 0; level < 4; ++level) {
+        ASSERT_TRUE(stored.profiles(level));
+        for (int k = 0; k < 100; ++k) {
+            const vtex::octree::Vec3 from(u(rng), u(rng), h(rng)), to(u(rng), u(rng), h(rng));
+            EXPECT_EQ(stored.meanFactor(level, from, to), measured.meanFactor(level, from, to)) << level;
+        }
+    }
 }
 
 // A texel uniform across and layered in height: each profiled coarse voxel's density is its

@@ -67,7 +67,8 @@ public:
 
     /// None: every factor is 1.
     DensityProfile() = default;
-    /// `tree`'s profile (loads its profile level).
+    /// `tree`'s profile: from tree.layerMeans when the build stored them for this profile level,
+    /// else measured now (which reads the profile level).
     explicit DensityProfile(const Octree& tree);
 
     /// Whether `level`'s voxels carry the profile.
@@ -129,6 +130,7 @@ public:
     };
 
 private:
+    explicit DensityProfile(const LayerMeans& means);
     int mLayers = 0;                          ///< 2^(profile level)
     std::vector<std::vector<double>> mFactor;  ///< [level][layer]: p on the layer
     /// [level][k]: ∫ p from z = 0 to the layer boundary k / mLayers, in layer widths (k = 0 … mLayers)
@@ -136,5 +138,10 @@ private:
     /// [level][x or y][column]: p_x, p_y on the level's columnsAcross(level) columns
     std::vector<std::array<std::vector<double>, 2>> mAcross;
 };
+
+/// The profile level's mean density per layer of each axis (what DensityProfile is made of), at
+/// level min(DensityProfile::kProfileLevel, deepest): one descent of the stored nodes, which reads
+/// that level. What OctreeBuilder::compress stores in the tree, so that renders need not.
+LayerMeans measureLayerMeans(const Octree& tree);
 
 }  // namespace vtex::octree

@@ -17,6 +17,7 @@
 #include <vtex/octree/filtering.h>
 #include <vtex/octree/volume.h>
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -83,6 +84,16 @@ struct SourceMeasures {
     friend bool operator==(const SourceMeasures&, const SourceMeasures&) = default;
 };
 
+/// The mean density per layer of each axis at the coarse levels' density profile level (what
+/// octree::DensityProfile is made of; octree/density_profile.h): measured by the build, which has
+/// every level in memory, and kept in the .vto's PROF section (docs/formats.md), so that a render
+/// that marches only coarse levels need not read the profile's finer one.
+struct LayerMeans {
+    std::uint32_t level = 0;                  ///< the level measured: 2^level layers an axis
+    std::array<std::vector<double>, 3> axis;  ///< [0] per x column, [1] per y column, [2] per z layer
+    friend bool operator==(const LayerMeans&, const LayerMeans&) = default;
+};
+
 class Octree {
 public:
     OctreeInfo info;
@@ -95,6 +106,9 @@ public:
     /// The render's measures against the source, when `vtex build --source` stored them. A tree
     /// built or updated in memory has none until they are measured for it.
     std::optional<SourceMeasures> measures;
+    /// The density profile's layer means, when the tree was built or read with them (a tree
+    /// whose levels are changed afterwards must drop them).
+    std::optional<LayerMeans> layerMeans;
 
     Octree();
     ~Octree();
