@@ -105,7 +105,6 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
     const std::uint64_t maxSteps = std::uint64_t(std::min(1e7, 3 * (extent + 3) * double(n) + 64));
     std::int64_t idx[3];
     double next[3];
-    const double delta[3] = {invN * std::abs(invDir.x()), invN * std::abs(invDir.y()), invN * std::abs(invDir.z())};
     // The plane through which the ray leaves voxel idx along axis a.
     const auto planeCrossing = [&](int a) {
         if (step[a] == 0) return std::numeric_limits<double>::infinity();
@@ -171,7 +170,7 @@ std::uint64_t marchGrid(const LevelGrid& grid, const Eigen::Vector3d& p0, const 
             next[2] = (idx[2] == n - 1 && step[2] > 0) || (idx[2] == 0 && step[2] < 0) ? std::numeric_limits<double>::infinity()
                                                                                         : planeCrossing(2);
         } else {
-            next[a] += delta[a];
+            next[a] = planeCrossing(a);
         }
     }
     if (run) visit(grid.voxels[run], runStart, std::min(s, length) - runStart);
