@@ -78,6 +78,11 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                                     {"level_scales", m.levelScales},
                                     {"shadow_levels", m.shadowLevels}};
         }
+        if (tree.layerMeans) {
+            // The coarse levels' density profile's layer means (octree::LayerMeans, the PROF section).
+            const octree::LayerMeans& m = *tree.layerMeans;
+            j["density_profile"] = {{"level", m.level}, {"x", m.axis[0]}, {"y", m.axis[1]}, {"z", m.axis[2]}};
+        }
         out << j.dump() << '\n';
         return;
     }
@@ -112,6 +117,21 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                       m.tau, m.tolerance, int(m.faithfulCoarsest), int(m.faithfulFinest), int(m.meshLevel),
                       m.levelScales.size(), m.shadowLevels.size());
         out << line;
+    }
+    if (tree.layerMeans) {
+        // The coarse levels' density profile (octree::DensityProfile): its height profile, a few
+        // layers of the profile level, bottom to top, as a share of the level's mean.
+        const octree::LayerMeans& m = *tree.layerMeans;
+        const std::size_t layers = m.axis[2].size(), every = std::max<std::size_t>(1, layers / 8);
+        double mean = 0;
+        for (const double v : m.axis[2]) mean += v / double(layers);
+        out << "density profile (level " << m.level << " layer means, stored by the build): height, every " << every
+            << (every == 1 ? "st" : "th") << " layer over the mean:";
+        for (std::size_t k = 0; k < layers; k += every) {
+            std::snprintf(line, sizeof line, " %.2f", mean > 0 ? m.axis[2][k] / mean : 0.0);
+            out << line;
+        }
+        out << '\n';
     }
     printFidelity(measures, options.source, out);
     printChecksums(check, out);

@@ -54,6 +54,21 @@ TEST(SamplerCli, PatternSampleBuildInspect) {
     EXPECT_EQ(j["per_level"].size(), 6u) << "32³ has levels 0..5";
     EXPECT_EQ(j["checksums"]["valid"], true);
     EXPECT_EQ(j["cyclic"], true);
+    // The density profile's layer means (the PROF section): level 5's, 32 a side, and over every
+    // axis their mean is the level's mean density of the statistics (each axis shares the level's
+    // mass among its layers; two sums of the same densities in another order).
+    ASSERT_TRUE(j.contains("density_profile")) << r.out;
+    EXPECT_EQ(j["density_profile"]["level"], 5);
+    for (const char* axis : {"x", "y", "z"}) {
+        ASSERT_EQ(j["density_profile"][axis].size(), 32u) << axis;
+        double mean = 0;
+        for (const auto& v : j["density_profile"][axis]) mean += v.get<double>() / 32;
+        EXPECT_NEAR(mean, j["per_level"][5]["mean_density"].get<double>(),
+                    1e-9 * j["per_level"][5]["mean_density"].get<double>()) << axis;
+    }
+    r = runVtex({"inspect", vto.string()});
+    ASSERT_EQ(r.exitStatus, 0) << r.err;
+    EXPECT_NE(r.out.find("density profile (level 5 layer means"), std::string::npos) << r.out;
     r = runVtex({"inspect", vtl.string()});
     ASSERT_EQ(r.exitStatus, 0) << r.err;
     EXPECT_NE(r.out.find("fit error"), std::string::npos);
