@@ -156,6 +156,16 @@ TEST(VtoFormat, ConsistentButWrongContentIsRefused) {
     EXPECT_THROW(parseVtl(serializeVtl(v), "bad.vtl"), InputError);
 }
 
+// What parseVto says of `tree`'s bytes: "section 'X': problem", or "accepted".
+std::string refusalOf(const Octree& tree) {
+    try {
+        parseVto(serializeVto(tree), "bad.vto");
+    } catch (const InputError& e) {
+        return std::string(e.location()) + ": " + e.what();
+    }
+    return "accepted";
+}
+
 // What `vtex build --source` stores for renders (the MEAS section): a tree with a record.
 SourceMeasures sampleMeasures() {
     SourceMeasures m;
@@ -200,12 +210,7 @@ TEST(VtoFormat, ImpossibleSourceMeasuresAreRefused) {
     const auto refusal = [](const SourceMeasures& m) {
         Octree tree = smallOctree();
         tree.measures = m;
-        try {
-            parseVto(serializeVto(tree), "bad.vto");
-        } catch (const InputError& e) {
-            return std::string(e.location()) + ": " + e.what();
-        }
-        return std::string("accepted");
+        return refusalOf(tree);
     };
     const auto refusedAtMeas = [&](const SourceMeasures& m) { return refusal(m).find("section 'MEAS'") == 0; };
     SourceMeasures m = sampleMeasures();
@@ -269,12 +274,7 @@ TEST(VtoFormat, StoredLayerMeansRoundTripAndImpossibleOnesAreRefused) {
     const auto refusal = [](const LayerMeans& m) {
         Octree t = smallOctree();
         t.layerMeans = m;
-        try {
-            parseVto(serializeVto(t), "bad.vto");
-        } catch (const InputError& e) {
-            return std::string(e.location()) + ": " + e.what();
-        }
-        return std::string("accepted");
+        return refusalOf(t);
     };
     const auto refusedAtProf = [&](const LayerMeans& m) { return refusal(m).find("section 'PROF'") == 0; };
     LayerMeans m = *tree.layerMeans;
