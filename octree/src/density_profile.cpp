@@ -14,7 +14,7 @@ namespace {
 // [1] per y column, [2] per z layer (over x and y). One descent of the stored nodes down to
 // `level`: a node there, or a leaf above it, stands for a block of s = 2^(level − ℓ) voxels a
 // side, which puts s² of its density into each of the s layers it spans on every axis. (A vertical
-// walk per column gave the same sums, with a lookup per voxel: 20 ms at level 6, inside the first
+// walk per column gave these sums up to rounding, with a lookup per voxel: 5–10 ms at level 6, inside the first
 // render that marched a profiled level.)
 std::array<std::vector<double>, 3> axisMeans(const Octree& tree, int level) {
     const int n = 1 << level;

@@ -576,7 +576,7 @@ Octree OctreeBuilder::compress(Progress& progress) const {
     for (std::uint32_t l = 0; l <= L; ++l) tree.stats[l].storedNodes = tree.levels[l].size();
     // What a render's coarse levels are profiled with (octree/density_profile.h), measured here
     // where every level is in memory; a render that marches only those levels then reads none
-    // finer (20 ms of the bush field's far view went into reading level 6 for it).
+    // finer (reading level 6 for it took 10 ms of the bush field's far view).
     if (DensityProfile::profiledLevels(int(L)) > 0) tree.layerMeans = measureLayerMeans(tree);
     progress.finish();
     return tree;
