@@ -114,13 +114,19 @@ SceneGeometry buildSceneGeometry(const Scene& scene, bool cellsAsFloors) {
 
 Mat3 tiledJacobian(const Prim& prim, const Vec3& r) { return prim.cell.jacobian(r) * prim.map.linearInverse(); }
 
-double localScale(const Prim& prim, const Vec3& r) { return localScale(prim.cell, r, prim.map); }
+Mat3 tiledJacobianInverse(const Prim& prim, const Vec3& r) {
+    return prim.affine ? prim.affineJacobianInverse : Mat3(tiledJacobian(prim, r).inverse());
+}
+
+double localScale(const Prim& prim, const Vec3& r) {
+    return prim.affine ? prim.affineScale : localScale(prim.cell, r, prim.map);
+}
 
 SourcePoint sourcePoint(const Prim& prim, const Vec3& rt, const Vec3& referenceNormal, const Vec3& d) {
     SourcePoint p;
     p.cell = prim.map.toCell(rt);
     p.world = prim.cell.map(p.cell);
-    const Vec3 n = tiledJacobian(prim, p.cell).inverse().transpose() * referenceNormal;
+    const Vec3 n = tiledJacobianInverse(prim, p.cell).transpose() * referenceNormal;
     const double length = n.norm();
     p.normal = length > 0 && std::isfinite(length) ? Vec3(n / length) : Vec3(-d);
     p.scale = localScale(prim, p.cell);

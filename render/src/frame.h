@@ -135,6 +135,8 @@ inline Vec3 tile(const Vec3& r, const Prim& prim) { return prim.map.toReference(
 /// The Jacobian at cell coordinates r of the map from tiled reference space to the world: the
 /// cell's, times the inverse of the face's CellMap.
 Mat3 tiledJacobian(const Prim& prim, const Vec3& r);
+/// tiledJacobian(prim, r).inverse(), kept by an affine cell's Prim.
+Mat3 tiledJacobianInverse(const Prim& prim, const Vec3& r);
 
 /// World length per unit of tiled reference space around cell coordinates r (footprint.h).
 double localScale(const Prim& prim, const Vec3& r);

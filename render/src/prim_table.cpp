@@ -1,6 +1,9 @@
 // See prim_table.h.
 #include "prim_table.h"
 
+#include "footprint.h"
+#include "frame.h"
+
 namespace vtex::render::detail {
 namespace {
 
@@ -40,6 +43,11 @@ Prim PrimTable::build(std::size_t i) const {
         prim.map = map(i);
         if (s.floor) prim.p = prim.cell.faceCorners(0);
         prim.textured = s.cell;
+        if (prim.cell.affine()) {
+            prim.affineScale = localScale(prim.cell, Vec3::Zero(), prim.map);
+            prim.affineJacobianInverse = tiledJacobian(prim, Vec3::Zero()).inverse();
+            prim.affine = true;
+        }
     }
     return prim;
 }

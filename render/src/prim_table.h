@@ -29,6 +29,13 @@ struct Prim {
     std::array<Vec3, 4> n;  ///< unit shading normals at the corners
     TrilinearCell cell;     ///< textured faces only
     CellMap map;            ///< textured faces: cell → tiled reference coordinates (cell_map.h)
+    /// An affine cell's localScale (footprint.h) and the inverse of its tiledJacobian (frame.h),
+    /// the same at every point of it: kept, since every camera span and shadow query asks for
+    /// them (a determinant, a cube root and a 3×3 inverse; libm's cbrt alone was 1.3 % of the bush
+    /// field's middle view). Unset for a trilinear cell, whose Jacobian varies.
+    bool affine = false;
+    double affineScale = 0;
+    Mat3 affineJacobianInverse = Mat3::Identity();
 };
 
 class PrimTable {

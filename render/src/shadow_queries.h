@@ -86,7 +86,7 @@ public:
         if (span) {
             lr = span->light;
         } else {
-            lr = tiledJacobian(prim, r).inverse() * l;
+            lr = tiledJacobianInverse(prim, r) * l;
             const double len = lr.norm();
             if (!(len > 0) || !std::isfinite(len)) return cachedShadow(slot, primIndex, r, l, 0, &prim);
             lr /= len;
@@ -190,7 +190,7 @@ public:
         if (depth >= kMaxChain || texel.shadowMeshWeight(choice.requested) > 0 ||
             !mOptions.approximations.chainLatticeNodes)
             return exactFrom(rn);
-        Vec3 lr = tiledJacobian(prim, rn).inverse() * l;
+        Vec3 lr = tiledJacobianInverse(prim, rn) * l;
         const double len = lr.norm();
         if (!(len > 0) || !std::isfinite(len)) return exactFrom(rn);
         lr /= len;
@@ -271,7 +271,7 @@ public:
                 }
                 // The line leaves the top (z = 1) after 1/lr.z reference units, 1/(J⁻¹l).z along
                 // l in the world (J: the tiled map's Jacobian, constant over a flat field).
-                const double zRate = (tiledJacobian(prim, r).inverse() * l).z();
+                const double zRate = (tiledJacobianInverse(prim, r) * l).z();
                 if (zRate > 0 && std::isfinite(zRate))
                     return t * tracedShadow(o, l, tMax, width, -1, Vec3::Zero(), counters, false, (1 + 1e-9) / zRate);
             }
@@ -371,7 +371,7 @@ private:
             if (!mTracer.prims().textured(i) || mLightCache.grid(int(i)).nw <= 0) continue;
             const Prim prim = mTracer.prims()[i];
             if (!NearShadowTable::showsOneTile(prim.map)) continue;
-            const Mat3 inverse = tiledJacobian(prim, Vec3::Constant(0.5)).inverse();
+            const Mat3 inverse = tiledJacobianInverse(prim, Vec3::Constant(0.5));
             for (std::size_t k = 0; k < lights; ++k) {
                 const Vec3 lr = inverse * mLightCache.direction(int(k));
                 const double len = lr.norm();

@@ -64,7 +64,7 @@ SpanContext::SpanContext(const Scene& scene, const RenderOptions& options, const
     dir = delta / length;
     // Light directions go to reference space through the inverse Jacobian of the tiled map,
     // taken once per span (the mild-deformation assumption again).
-    jtInv = tiledJacobian(prim, 0.5 * (rIn + rOut)).inverse();
+    jtInv = tiledJacobianInverse(prim, 0.5 * (rIn + rOut));
     if (!jtInv.allFinite()) jtInv = Mat3::Identity();
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
         Light& sl = lights[i];

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 namespace vtex::render::test {
 namespace {
 
@@ -122,6 +124,35 @@ TEST(PrimTable, KeptPrimitivesAreThoseBuiltOnDemand) {
         EXPECT_EQ(added.face, 0);
         for (std::size_t c = 0; c < 8; ++c) EXPECT_EQ(grown.cell(kept.size()).corners()[c], kept.cell(0).corners()[c]);
     }
+}
+
+// An affine cell's Prim keeps its localScale and the inverse of its tiled Jacobian, which every
+// camera span and shadow query asks for: at points all over the cell they are what the cell and
+// its map compute there, bit for bit (the Jacobian of an affine cell is the same everywhere); a
+// trilinear cell keeps nothing and computes them where asked. The flat grid's cells are affine
+// (flat, with the normals of the plane), the bumpy grid's are not.
+TEST(PrimTable, AnAffineCellKeepsItsScaleAndJacobianInverse) {
+    Scene scene = primScene();
+    const std::size_t texel = 0;
+    addSurface(scene, gridMesh(0, 4, 2, 6, 0.5, 2), texel, 0.9, {1, 1});
+    const detail::SceneGeometry geometry = detail::buildSceneGeometry(scene);
+    const detail::PrimTable& prims = geometry.tracer->prims();
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0, 1);
+    int affine = 0, trilinear = 0;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        const detail::Prim prim = prims[i];
+        if (!prim.textured) continue;
+        EXPECT_EQ(prim.affine, prim.cell.affine()) << i;
+        (prim.affine ? affine : trilinear) += 1;
+        for (int k = 0; k < 20; ++k) {
+            const Vec3 r(u(rng), u(rng), u(rng));
+            EXPECT_EQ(detail::localScale(prim, r), detail::localScale(prim.cell, r, prim.map)) << i;
+            EXPECT_EQ(detail::tiledJacobianInverse(prim, r), Mat3(detail::tiledJacobian(prim, r).inverse())) << i;
+        }
+    }
+    EXPECT_EQ(affine, 4);
+    EXPECT_EQ(trilinear, 9);
 }
 
 // TrilinearCell::size and faceTwist are computed when asked (cells are rebuilt per ray): the
