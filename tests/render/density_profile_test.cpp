@@ -16,10 +16,10 @@
 
 #include <cmath>
 #include <filesystem>
-#include <functional>
 #include <iostream>
 #include <limits>
 #include <random>
+#include <utility>
 
 namespace {
 
@@ -27,13 +27,14 @@ using vtex::octree::DensityProfile;
 using vtex::render::test::makeOctree;
 using vtex::render::test::sphereVoxel;
 
-// 2^levels voxels a side, density 2 in the layers of heights [0.25, 0.5), empty elsewhere.
-std::shared_ptr<const vtex::octree::Octree> slab(int levels) {
+// 2^levels voxels a side, density 2 in the layers of heights [0.25, 0.5), empty elsewhere
+// (`compress`: uniform blocks stored as leaves above the finest level).
+std::shared_ptr<const vtex::octree::Octree> slab(int levels, bool compress = false) {
     const int n = 1 << levels;
     return makeOctree(levels, [n](int, int, int z) -> std::optional<vtex::octree::VoxelData> {
         if (4 * z < n || 2 * z >= n) return std::nullopt;
         return sphereVoxel(2.0f);
-    });
+    }, compress);
 }
 
 // 64³ voxels, the same in every layer across, a different density in each layer.
@@ -41,12 +42,13 @@ std::shared_ptr<const vtex::octree::Octree> layered() {
     return makeOctree(6, [](int, int, int z) { return std::optional(sphereVoxel(0.5f + float((z * 37) % 11))); });
 }
 
-// 64³ voxels, density 2 in the box x ∈ [0.25, 0.5), z ∈ [0.25, 0.5) (every y), empty elsewhere.
-std::shared_ptr<const vtex::octree::Octree> box() {
+// 64³ voxels, density 2 in the box x ∈ [0.25, 0.5), z ∈ [0.25, 0.5) (every y), empty elsewhere
+// (`compress` as for slab).
+std::shared_ptr<const vtex::octree::Octree> box(bool compress = false) {
     return makeOctree(6, [](int x, int, int z) -> std::optional<vtex::octree::VoxelData> {
         if (x < 16 || x >= 32 || z < 16 || z >= 32) return std::nullopt;
         return sphereVoxel(2.0f);
-    });
+    }, compress);
 }
 
 // 64³ voxels of density f(x)·g(y)·h(z), small whole numbers whose products and the levels'
@@ -148,19 +150,9 @@ TEST(DensityProfile, KeepsEachVoxelsMassAndPutsItWhereTheLayersHaveIt) {
 // for every voxel below it: its profile must be that of the same texel stored voxel by voxel
 // (the box and the slab compress to leaves of levels 2–4 that span several layers and columns).
 TEST(DensityProfile, ACompressedTreeHasItsUncompressedTreesProfile) {
-    const auto boxAt = [](int x, int, int z) -> std::optional<vtex::octree::VoxelData> {
-        if (x < 16 || x >= 32 || z < 16 || z >= 32) return std::nullopt;
-        return sphereVoxel(2.0f);
-    };
-    const auto slabAt = [](int, int, int z) -> std::optional<vtex::octree::VoxelData> {
-        if (z < 16 || z >= 32) return std::nullopt;
-        return sphereVoxel(3.0f);
-    };
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> u(-0.5, 1.5), h(0, 1);
-    for (const auto& at : {std::function<std::optional<vtex::octree::VoxelData>(int, int, int)>(boxAt),
-                           std::function<std::optional<vtex::octree::VoxelData>(int, int, int)>(slabAt)}) {
-        const auto plain = makeOctree(6, at), packed = makeOctree(6, at, true);
+    for (const auto& [plain, packed] : {std::pair(box(), box(true)), std::pair(slab(6), slab(6, true))}) {
         ASSERT_LT(packed->storedNodes(), plain->storedNodes() / 4);  // leaves above level 6 really stand in
         const DensityProfile a(*plain), b(*packed);
         for (int level = 0; level < 4; ++level)
