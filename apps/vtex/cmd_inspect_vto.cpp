@@ -125,8 +125,8 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
         const std::size_t layers = m.axis[2].size(), every = std::max<std::size_t>(1, layers / 8);
         double mean = 0;
         for (const double v : m.axis[2]) mean += v / double(layers);
-        out << "density profile (level " << m.level << " layer means, stored by the build): height, every " << every
-            << (every == 1 ? "st" : "th") << " layer over the mean:";
+        out << "density profile (level " << m.level << " layer means, stored by the build): layers 0, " << every
+            << ", " << 2 * every << " ... bottom to top, over the mean:";
         for (std::size_t k = 0; k < layers; k += every) {
             std::snprintf(line, sizeof line, " %.2f", mean > 0 ? m.axis[2][k] / mean : 0.0);
             out << line;

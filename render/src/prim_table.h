@@ -32,7 +32,8 @@ struct Prim {
     /// An affine cell's localScale (footprint.h) and the inverse of its tiledJacobian (frame.h),
     /// the same at every point of it: kept, since every camera span and shadow query asks for
     /// them (a determinant, a cube root and a 3×3 inverse; libm's cbrt alone was 1.3 % of the bush
-    /// field's middle view). Unset for a trilinear cell, whose Jacobian varies.
+    /// field's middle view). Unset for a trilinear cell, whose Jacobian varies. (Its own flag:
+    /// a plain face's default-constructed cell says affine() too.)
     bool affine = false;
     double affineScale = 0;
     Mat3 affineJacobianInverse = Mat3::Identity();
