@@ -76,7 +76,8 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                                     {"faithful_levels", {m.faithfulCoarsest, m.faithfulFinest}},
                                     {"mesh_level", m.meshLevel},
                                     {"level_scales", m.levelScales},
-                                    {"shadow_levels", m.shadowLevels}};
+                                    {"shadow_levels", m.shadowLevels},
+                                    {"own_shares", m.ownShares}};
         }
         if (tree.layerMeans) {
             // The coarse levels' density profile's layer means (octree::LayerMeans, the PROF section).
@@ -117,6 +118,16 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                       m.tau, m.tolerance, int(m.faithfulCoarsest), int(m.faithfulFinest), int(m.meshLevel),
                       m.levelScales.size(), m.shadowLevels.size());
         out << line;
+        if (!m.ownShares.empty()) {
+            // A lit voxel's own leaf (docs/render.md): the share of its matter a shadow query
+            // from it takes off its own voxel, per level.
+            out << "own shares by level:";
+            for (const double s : m.ownShares) {
+                std::snprintf(line, sizeof line, " %.3f", s);
+                out << line;
+            }
+            out << '\n';
+        }
     }
     if (tree.layerMeans) {
         // The coarse levels' density profile (octree::DensityProfile): its height profile, a few

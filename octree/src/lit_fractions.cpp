@@ -45,6 +45,24 @@ Vec3 pointAtDepth(const ChordMedium& medium, std::uint32_t level, const Segments
 // The segments from p along the unit upward direction `up` to the top face, through the tiled texel.
 Segments toTheTop(const Vec3& p, const Vec3& up) { return detail::tiledSegments(p, up * (std::max(0.0, 1 - p.z()) / up.z())); }
 
+// The optical depth toward the top from p along `up` at `level`, the density of the voxel p lies
+// in times ownFactor up to where the ray leaves it (located a hair along the ray, as the
+// renderer's march locates a point on a face).
+double shadowDepth(const ChordMedium& medium, std::uint32_t level, const Vec3& p, const Vec3& up, double ownFactor) {
+    if (ownFactor == 1) return detail::chordDepth(medium, level, toTheTop(p, up));
+    const double n = std::ldexp(1.0, int(level)), invN = 1 / n;
+    const Vec3 q = p + (1e-7 * invN) * up;
+    double exit = std::max(0.0, 1 - p.z()) / up.z();
+    for (int a = 0; a < 3; ++a)
+        if (up[a] != 0) {
+            const double f = std::floor(q[a] * n);
+            exit = std::min(exit, ((up[a] > 0 ? f + 1 : f) * invN - p[a]) / up[a]);
+        }
+    exit = std::max(exit, 0.0);
+    const Vec3 end = p + exit * up;
+    return ownFactor * medium.depth(level, p, end) + detail::chordDepth(medium, level, toTheTop(end, up));
+}
+
 // What one chord gives: whether the mesh sees a surface there and lights it; per camera level the
 // volume's opacity and, per shadow level, its transmittance toward the light.
 struct ChordLight {
@@ -56,7 +74,8 @@ struct ChordLight {
 
 LitFractions measureLitFractions(const ChordMedium& medium, const ChordFirstHit& hit, const ChordVisibility& visible,
                                  double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
-                                 int chords, std::uint64_t seed, const LitPairs& wanted) {
+                                 int chords, std::uint64_t seed, const LitPairs& wanted,
+                                 const std::vector<double>& ownFactors) {
     const Octree& tree = medium.tree();
     const std::size_t levels = std::min(scales.size(), tree.levels.size());
     // Camera level c needs shadow levels c − 1 and finer: none past finestShadowLevel.
@@ -92,9 +111,12 @@ LitFractions measureLitFractions(const ChordMedium& medium, const ChordFirstHit&
                 t.opacity[c] = alpha;
                 if (!(alpha > 0)) continue;
                 // Inverse-CDF sampling of the weight T·σ: the depth d at which 1 − e^−d = u·α.
-                const Segments ray = toTheTop(pointAtDepth(medium, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha)), light);
+                const Vec3 p = pointAtDepth(medium, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha));
                 for (std::size_t l = firstShadow(c); l < shadowEnd; ++l)
-                    if (measured(c, l)) t.shadow[c * levels + l] = std::exp(-tau * scales[l] * detail::chordDepth(medium, std::uint32_t(l), ray));
+                    if (measured(c, l)) {
+                        const double own = l < ownFactors.size() ? ownFactors[l] : 1.0;
+                        t.shadow[c * levels + l] = std::exp(-tau * scales[l] * shadowDepth(medium, std::uint32_t(l), p, light, own));
+                    }
             }
         }
     });

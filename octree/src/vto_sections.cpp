@@ -87,6 +87,8 @@ std::string measuresBytes(const SourceMeasures& m) {
     for (const double s : m.levelScales) w.f64(s);
     w.u32(std::uint32_t(m.shadowLevels.size()));
     for (const std::int32_t l : m.shadowLevels) w.u32(std::uint32_t(l));
+    w.u32(std::uint32_t(m.ownShares.size()));
+    for (const double s : m.ownShares) w.f64(s);
     return std::move(w.str());
 }
 
@@ -110,6 +112,12 @@ SourceMeasures parseVtoMeasures(std::string_view payload, const Octree& tree, co
     const std::uint32_t shadows = r.u32();
     if (!r.ok() || shadows > levelCount) throw InputError(file, "wrong size", where);
     for (std::uint32_t i = 0; i < shadows; ++i) m.shadowLevels.push_back(std::int32_t(r.u32()));
+    // A record written before the own shares ends here (its version makes renders measure again).
+    if (r.ok() && r.remaining() > 0) {
+        const std::uint32_t shares = r.u32();
+        if (!r.ok() || shares > levelCount) throw InputError(file, "wrong size", where);
+        for (std::uint32_t i = 0; i < shares; ++i) m.ownShares.push_back(r.f64());
+    }
     if (!r.ok() || r.remaining() != 0) throw InputError(file, "wrong size", where);
     const auto level = [&](std::int32_t l) { return l >= 0 && std::uint32_t(l) < levelCount; };
     if (!(m.tau > 0) || !std::isfinite(m.tau) || !(m.tolerance >= 0) || !std::isfinite(m.tolerance))
@@ -119,6 +127,8 @@ SourceMeasures parseVtoMeasures(std::string_view payload, const Octree& tree, co
         throw InputError(file, "a level beyond the tree's " + std::to_string(levelCount), where);
     if (!std::all_of(m.levelScales.begin(), m.levelScales.end(), [](double s) { return s > 0 && std::isfinite(s); }))
         throw InputError(file, "a level scale that is not positive and finite", where);
+    if (!std::all_of(m.ownShares.begin(), m.ownShares.end(), [](double s) { return s >= 0 && s <= 1; }))
+        throw InputError(file, "an own share outside [0, 1]", where);
     return m;
 }
 

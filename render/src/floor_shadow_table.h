@@ -120,13 +120,15 @@ public:
 
     /// The transmittance toward the light from p0 (tiled reference space, inside the shell) of a
     /// cell of a field with nothing above it (`inverse`: lr's per-component reciprocal): the
-    /// query's own voxel of `grid` (level `level`) exactly (ownVoxel, as the near table takes it),
+    /// query's own voxel of `grid` (level `level`) exactly (ownVoxel with `ownFactor`, as the near
+    /// table takes it),
     /// times the line's from where it leaves that voxel to the top: its optical
     /// depth from a 3-D table of 2 points a voxel along x, y and z over the tile (periodic in x and
     /// y), each the march from the point to z = 1 on first use, interpolated trilinearly.
     double inside(int slot, const MarchVolume& volume, const LevelGrid& grid, double tau, int level, const Vec3& lr,
-                  const Vec3& inverse, const Vec3& p0) const {
-        const OwnVoxel o = ownVoxel(volume, grid, tau, level, p0, lr, inverse, std::numeric_limits<double>::infinity());
+                  const Vec3& inverse, const Vec3& p0, double ownFactor = 1) const {
+        const OwnVoxel o =
+            ownVoxel(volume, grid, tau, level, p0, lr, inverse, std::numeric_limits<double>::infinity(), ownFactor);
         const double own = o.depth;
         const Vec3 q = p0 + o.exit * lr;
         if (q.z() >= 1) return std::exp(-own);

@@ -43,7 +43,9 @@ namespace vtex::render::detail {
 /// A shadow query's share in the voxel of `grid` (level `level`) it starts in: from p0 (tiled
 /// reference space) along lr (unit; `inverse` its per-component reciprocal) to the face it leaves
 /// by, at most maxStep. The near shadow table and the field's volume table both take it exactly:
-/// a lit voxel's own density is what its query must see exactly.
+/// a lit voxel's own density is what its query must see exactly. `ownFactor` scales that
+/// density: a camera march's query takes off the share of the piece it lights
+/// (TexelRuntime::ownDepthFactor), other queries 1.
 struct OwnVoxel {
     double exit = 0;      ///< how far along lr the query leaves its voxel, in [0, maxStep]
     int face = -1;        ///< the axis of the face it leaves by (−1: lr is 0)
@@ -52,7 +54,7 @@ struct OwnVoxel {
     double depth = 0;     ///< the optical depth over [0, exit]
 };
 inline OwnVoxel ownVoxel(const MarchVolume& volume, const LevelGrid& grid, double tau, int level, const Vec3& p0,
-                         const Vec3& lr, const Vec3& inverse, double maxStep) {
+                         const Vec3& lr, const Vec3& inverse, double maxStep, double ownFactor = 1) {
     OwnVoxel o;
     const double n = double(grid.n), invN = 1 / n;
     // Located a hair along the ray, as the march locates a point on a voxel face.
@@ -75,7 +77,7 @@ inline OwnVoxel ownVoxel(const MarchVolume& volume, const LevelGrid& grid, doubl
     const std::uint32_t cell = grid.cell(o.idx[0], o.idx[1], o.idx[2]);
     if (!(cell & LevelGrid::kEmpty)) {
         const GridVoxel& v = grid.voxels[cell];
-        o.depth = v.extinction(tau, lr) * o.exit * ProfileFactor(volume, level, p0, lr)(0, o.exit);
+        o.depth = ownFactor * v.extinction(tau, lr) * o.exit * ProfileFactor(volume, level, p0, lr)(0, o.exit);
     }
     return o;
 }
@@ -152,11 +154,12 @@ public:
     /// Transmittance of the segment p0 → p0 + step·lr (tiled reference space, within one tile
     /// of a cell that shows one tile) through `volume` at `level` (≤ kMaxLevel; `grid` its
     /// grid), `maxStep` the longest such segment: the segment's share in the voxel it starts in
-    /// exactly, up to the face it leaves by; the rest from that face's entry of the table.
+    /// exactly (its density times `ownFactor`, ownVoxel), up to the face it leaves by; the rest
+    /// from that face's entry of the table.
     double transmittance(int slotIndex, const MarchVolume& volume, const LevelGrid& grid, double tau, int level,
-                         const Vec3& p0, double step, double maxStep) const {
+                         const Vec3& p0, double step, double maxStep, double ownFactor = 1) const {
         const Slot& s = slot(slotIndex);
-        const OwnVoxel o = ownVoxel(volume, grid, tau, level, p0, s.lr, s.inverse, step);
+        const OwnVoxel o = ownVoxel(volume, grid, tau, level, p0, s.lr, s.inverse, step, ownFactor);
         const double own = o.depth, exit = o.exit;
         if (!(step > exit) || o.face < 0) return std::exp(-own);
         // The rest from where on the face the query leaves (fractions of the voxel along the

@@ -392,6 +392,7 @@ RenderResult renderSceneInArena(const Scene& scene, const RenderOptions& options
         result.stats.meshLevels.push_back(t.source ? t.meshLevel : -1.0);
         result.stats.levelScales.push_back(t.levelScale);
         result.stats.shadowLevels.push_back(t.shadowLevels);
+        result.stats.ownShares.push_back(t.ownShare);
         const TexelDef& def = scene.texels[i];
         const bool sourced = def.sourceData || !def.source.empty();
         result.stats.sourceMeasures.push_back(t.measuresStored ? "stored" : sourced ? "measured" : "none");
@@ -454,6 +455,7 @@ std::string formatStatsJson(const RenderStats& s) {
         j["mesh_levels"] = s.meshLevels;
         j["level_scales"] = s.levelScales;
         j["shadow_levels"] = s.shadowLevels;
+        j["own_shares"] = s.ownShares;
         j["source_measures"] = s.sourceMeasures;
         j["source_loaded"] = s.sourceLoaded;
         j["approximations"] = s.approximations;

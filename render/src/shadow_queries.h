@@ -41,12 +41,15 @@ public:
     // faces and cell floors block, texel cells attenuate at the level of the cone `width`
     // (world units, held constant along the shadow ray).
     // `hint`: the cell o lies in, at cell coordinates hintR, when the caller knows it.
+    // `litVoxel`: o is a camera march's voxel, lit by this query, in the hint's cell: its own
+    // voxel's density is taken times TexelRuntime::ownDepthFactor (the piece it lights does not
+    // shadow it).
     double shadowTransmittance(const Vec3& o, const Vec3& l, double tMax, double width, const Prim* hint,
-                               const Vec3& hintR, Counters& counters) const {
+                               const Vec3& hintR, Counters& counters, bool litVoxel = false) const {
         const int hintPrim = hint ? hint->index : -1;
         if (const int slot = latticeSlot(l, tMax, hintPrim); slot >= 0)
-            return nearAndCachedShadow(slot, *hint, hintR, l, width, counters);
-        return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters);
+            return nearAndCachedShadow(slot, *hint, hintR, l, width, counters, nullptr, litVoxel);
+        return tracedShadow(o, l, tMax, width, hintPrim, hintR, counters, false, 0, litVoxel);
     }
 
     // The slot of the transmittance lattice that answers a shadow query toward l (up to tMax)
@@ -70,14 +73,15 @@ public:
     // `span`, when the query comes from a camera march: the reference-space light direction and
     // the local scale the march took at its span's middle, used instead of the query point's
     // own (the mild-deformation assumption the march itself makes; it saves a Jacobian, its
-    // inverse and a cube root per query).
+    // inverse and a cube root per query). `litVoxel`: the query lights a camera march's voxel
+    // (shadowTransmittance).
     struct SpanFrame {
         Vec3 light;  ///< unit, tiled reference space
         double scale;  ///< the local scale at the span's middle
         int level = -1;  ///< the shadow level when the caller knows it (−1: chosen from width)
     };
     double nearAndCachedShadow(int slot, const Prim& prim, const Vec3& r, const Vec3& l, double width,
-                               Counters& counters, const SpanFrame* span = nullptr) const {
+                               Counters& counters, const SpanFrame* span = nullptr, bool litVoxel = false) const {
         ++counters.shadow;
         const int primIndex = prim.index;
         const SurfaceRuntime& surface = mSurfaces[std::size_t(prim.surface)];
@@ -93,13 +97,14 @@ public:
         }
         const int level =
             span && span->level >= 0 ? span->level : shadowLevel(texel, width / (span ? span->scale : localScale(prim, r)));
+        const double own = litVoxel ? texel.ownDepthFactor(level) : 1.0;
         // A flat field with nothing above it: the query's own voxel and a look-up of the rest.
         if (mFieldAlone && level <= FloorShadowTable::kMaxVolumeLevel &&
             mFloorCells[std::size_t(primIndex) * mLightCache.lights() + std::size_t(slot)]) {
             const int table = mNearSlots[std::size_t(primIndex) * mLightCache.lights() + std::size_t(slot)];
             if (const LevelGrid* grid = texel.volume->grid(level))
                 return mFloorTable.inside(table, *texel.volume, *grid, texel.tauAt(level), level, mNearTable.slot(table).lr,
-                                          mNearTable.slot(table).inverse, tile(r, prim));
+                                          mNearTable.slot(table).inverse, tile(r, prim), own);
         }
         const double maxStep = kExactLatticeSteps / double(mLightCache.grid(primIndex).nw);
         const CellSegment near = segmentInCell(prim, r, lr, maxStep);
@@ -108,10 +113,10 @@ public:
         const LevelGrid* grid = nullptr;
         if (const int table = nearTableSlot(slot, primIndex, texel, lr, level, grid); table >= 0) {
             transmittance = mNearTable.transmittance(table, *texel.volume, *grid, texel.tauAt(level), level, near.p0,
-                                                     near.step, maxStep);
+                                                     near.step, maxStep, own);
         } else {
             const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), near.p0,
-                                                                near.p0 + near.step * lr, level, kTransmittanceCutoff);
+                                                                near.p0 + near.step * lr, level, kTransmittanceCutoff, own);
             counters.voxels += seg.blocks;
             transmittance = seg.transmittance;
         }
@@ -213,8 +218,9 @@ public:
     // leaf's own density and would shadow the leaf (the self-shadowing of issue 12). Its first
     // segment skips the self-intersection gap even without a hint (a hit of a segment offset
     // across the footprint may lie past the cell's side, where the caller has no cell for it).
+    // `litVoxel`: o is a camera march's voxel in the hint's cell (shadowTransmittance).
     double tracedShadow(const Vec3& o, const Vec3& l, double tMax, double width, int hintPrim, const Vec3& hintR,
-                        Counters& counters, bool fromSourceHit = false, double tStart = 0) const {
+                        Counters& counters, bool fromSourceHit = false, double tStart = 0, bool litVoxel = false) const {
         ++counters.shadow;
         bool first = true;
         return walkShadowRay(
@@ -235,8 +241,9 @@ public:
                 double result = 0;
                 if (meshWeight < 1) {
                     const int level = shadowLevel(texel, choice);
+                    const double own = litVoxel && startsAtHint ? texel.ownDepthFactor(level) : 1.0;
                     const SegmentTransmittance seg = marchTransmittance(*texel.volume, texel.tauAt(level), p0, p1, level,
-                                                                        kTransmittanceCutoff / transmittance);
+                                                                        kTransmittanceCutoff / transmittance, own);
                     counters.voxels += seg.blocks;
                     result = (1 - meshWeight) * seg.transmittance;
                 }

@@ -118,9 +118,9 @@ double SpanMarcher::shadowQuery(SpanContext& span, std::size_t i, const Vec3& lw
     double shadow;
     if (light.latticeSlot >= 0) {
         const ShadowQueries::SpanFrame frame{light.lr, span.scale, constantShadowLevel(span)};
-        shadow = mShadows.nearAndCachedShadow(light.latticeSlot, span.prim, rc, lw, width, counters, &frame);
+        shadow = mShadows.nearAndCachedShadow(light.latticeSlot, span.prim, rc, lw, width, counters, &frame, true);
     } else {
-        shadow = mShadows.shadowTransmittance(point.world(), lw, distance, width, &span.prim, rc, counters);
+        shadow = mShadows.shadowTransmittance(point.world(), lw, distance, width, &span.prim, rc, counters, true);
     }
     if (record && track.count < SpanContext::kTrackCapacity) {
         track.s[std::size_t(track.count)] = point.s;

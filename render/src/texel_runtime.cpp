@@ -8,6 +8,7 @@
 
 #include "footprint.h"
 #include "near_shadow_table.h"
+#include "own_share.h"
 
 #include <tbb/task_arena.h>
 
@@ -106,7 +107,8 @@ int meshLevelFrom(const octree::LitFractions& lit, const std::vector<int>& shado
 }
 
 MeasuredLighting measureLighting(const octree::ChordMedium& medium, const SourceBvh& source, const octree::ChordVisibility& visible,
-                                 double tau, const std::vector<double>& scales, const FaithfulLevels& faithful) {
+                                 double tau, const std::vector<double>& scales, const std::vector<double>& ownShares,
+                                 const FaithfulLevels& faithful) {
     const octree::ChordFirstHit hit = [&](const Vec3& a, const Vec3& b) -> std::optional<double> {
         if (const auto h = source.intersect(a, b, 0)) return h->s;
         return std::nullopt;
@@ -116,8 +118,11 @@ MeasuredLighting measureLighting(const octree::ChordMedium& medium, const Source
     const std::size_t coarsest = std::size_t(std::max(faithful.coarsest, 0));
     const std::size_t finest = std::max(std::size_t(std::max(faithful.finest, 0)), coarsest);
     const octree::LitPairs wanted = [&](std::size_t c, std::size_t l) { return l <= coarsest || l + 1 == c; };
+    // The volume's shadow rays as the renderer's from a lit voxel: its own voxel less the piece it lights.
+    std::vector<double> ownFactors(ownShares.size());
+    std::transform(ownShares.begin(), ownShares.end(), ownFactors.begin(), [](double s) { return 1 - s; });
     const octree::LitFractions lit =
-        octree::measureLitFractions(medium, hit, visible, tau, scales, finest, kLoadChords, 1, wanted);
+        octree::measureLitFractions(medium, hit, visible, tau, scales, finest, kLoadChords, 1, wanted, ownFactors);
     const double margin = 2 * lit.meshStandardError();
     MeasuredLighting out{shadowLevelsFrom(lit, faithful.coarsest, margin, NearShadowTable::kMaxLevel), faithful.finest};
     out.meshLevel = meshLevelFrom(lit, out.shadowLevels, faithful, margin);
@@ -141,6 +146,8 @@ octree::SourceMeasures measureWith(const octree::Octree& tree, const SourceBvh& 
     m.faithfulCoarsest = measured.coarsest;
     m.faithfulFinest = measured.finest;
     m.meshLevel = faithful.finest;
+    // Every level a shadow may march: with the hybrid none finer than the mesh level.
+    m.ownShares = measureOwnShares(source, hybrid ? faithful.finest : int(tree.levels.size()) - 1);
     if (fitLevels) {
         // Measured before the fit, the faithful levels keep saying where the volume's chords
         // differ from the mesh's per chord, which a scale per level does not change.
@@ -151,7 +158,7 @@ octree::SourceMeasures measureWith(const octree::Octree& tree, const SourceBvh& 
         const std::uint32_t finest = hybrid ? std::uint32_t(faithful.finest) : 30u;
         for (const octree::ShellChordFit& fit : octree::fitShellChords(medium, visible, tau, kLevelFitChords, 1, finest))
             m.levelScales.push_back(fit.scale);
-        const MeasuredLighting lighting = measureLighting(medium, source, visible, tau, m.levelScales, faithful);
+        const MeasuredLighting lighting = measureLighting(medium, source, visible, tau, m.levelScales, m.ownShares, faithful);
         m.shadowLevels.assign(lighting.shadowLevels.begin(), lighting.shadowLevels.end());
         m.meshLevel = lighting.meshLevel;
     }
@@ -164,6 +171,7 @@ void applyMeasures(TexelRuntime& t, const octree::SourceMeasures& m, bool hybrid
     const FaithfulLevels measured{m.faithfulCoarsest, m.faithfulFinest};
     t.coarsestShadowLevel = (hybrid ? marchedLevels(measured) : measured).coarsest;
     t.levelScale = m.levelScales;
+    t.ownShare = m.ownShares;
     t.shadowLevels.assign(m.shadowLevels.begin(), m.shadowLevels.end());
     if (hybrid) {
         t.meshLevel = m.meshLevel;
@@ -312,7 +320,7 @@ namespace vtex::render {
 std::uint32_t sourceMeasuresVersion() {
     // The rules' revision (raise it when what measureWith measures changes otherwise), then the
     // constants the measures depend on: a record from another build of them is measured again.
-    constexpr int kRevision = 1;
+    constexpr int kRevision = 2;  // 2: the own shares
     const std::string recipe = std::to_string(kRevision) + " " + std::to_string(kLoadChords) + " " +
                                std::to_string(kLevelFitChords) + " " + std::to_string(kFinestMarchedLevel) + " " +
                                std::to_string(detail::NearShadowTable::kMaxLevel);

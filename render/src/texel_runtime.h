@@ -97,6 +97,15 @@ struct TexelRuntime {
     double tauAt(int level) const {
         return level >= 0 && std::size_t(level) < levelScale.size() ? tau * levelScale[std::size_t(level)] : tau;
     }
+    /// Per level, the share of a voxel's matter on the surface piece a lit point of it lies on
+    /// (measureOwnShares, own_share.h); empty without a source.
+    std::vector<double> ownShare;
+    /// The factor of its own voxel's optical depth a shadow query from a camera march's voxel
+    /// takes at `level`: the piece it lights does not shadow it (docs/render.md, "A lit voxel's
+    /// own leaf"). 1 where nothing was measured.
+    double ownDepthFactor(int level) const {
+        return level >= 0 && std::size_t(level) < ownShare.size() ? 1 - ownShare[std::size_t(level)] : 1.0;
+    }
     /// The mesh's share of a camera span at continuous level `requested` (LevelChoice::requested):
     /// 0 up to the mesh level L, rising linearly to 1 at L + kMeshBlendWidth.
     double meshWeight(double requested) const { return blendedMesh(requested, kMeshBlendWidth); }

@@ -5,6 +5,7 @@
 #include <vtex/octree/octree.h>
 
 #include "../../octree/src/container.h"
+#include "../../octree/src/vto_sections.h"
 #include "random_volume.h"
 
 #include <gtest/gtest.h>
@@ -179,6 +180,7 @@ SourceMeasures sampleMeasures() {
     m.meshLevel = 2;
     m.levelScales = {0.72, 0.81, 0.93};
     m.shadowLevels = {1};
+    m.ownShares = {0.001, 0.02, 0.29, 0.64};
     return m;
 }
 
@@ -205,6 +207,21 @@ TEST(VtoFormat, StoredSourceMeasuresRoundTrip) {
     expectAllCorruptionRefused(bytes, [](const std::string& b) { parseVto(b, "t.vto"); });
 }
 
+// A record written before the own shares (revision 1) ends after its shadow levels: it is read,
+// without shares (its version then makes a render measure again); anything after the shares'
+// count but the shares is refused.
+TEST(VtoFormat, ARecordWithoutOwnSharesIsRead) {
+    const Octree tree = smallOctree();
+    SourceMeasures m = sampleMeasures();
+    m.ownShares.clear();
+    std::string bytes = detail::measuresBytes(m);
+    ASSERT_EQ(bytes.substr(bytes.size() - 4), std::string(4, '\0'));  // the shares' count, 0
+    EXPECT_EQ(detail::parseVtoMeasures(bytes, tree, "t.vto"), m);
+    EXPECT_EQ(detail::parseVtoMeasures(bytes.substr(0, bytes.size() - 4), tree, "t.vto"), m);
+    for (const std::size_t cut : {1, 2, 3}) EXPECT_THROW(detail::parseVtoMeasures(bytes.substr(0, bytes.size() - cut), tree, "t.vto"), InputError);
+    EXPECT_THROW(detail::parseVtoMeasures(detail::measuresBytes(sampleMeasures()) + "x", tree, "t.vto"), InputError);
+}
+
 // Checksummed but impossible records are refused naming the section, by both readers.
 TEST(VtoFormat, ImpossibleSourceMeasuresAreRefused) {
     const auto refusal = [](const SourceMeasures& m) {
@@ -224,6 +241,15 @@ TEST(VtoFormat, ImpossibleSourceMeasuresAreRefused) {
     EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
     m = sampleMeasures();
     m.levelScales.assign(5, 1.0);  // more scales than levels
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    m = sampleMeasures();
+    m.ownShares[2] = 1.5;  // a share is a fraction
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    m = sampleMeasures();
+    m.ownShares[0] = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    m = sampleMeasures();
+    m.ownShares.assign(5, 0.5);  // more shares than levels
     EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
     m = sampleMeasures();
     m.tau = 0;

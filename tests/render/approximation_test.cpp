@@ -77,9 +77,10 @@ TEST(Approximations, DefaultsMoveTheBushFieldMeanByAtMostHalfAPercent) {
 // Lighting reuse on a realistic scene: the bush field (bush_field.h) from the benchmark's middle
 // direction, defaults against every voxel taking its own shadow and reflectance. The worst pixel
 // stays within the bound (the reused shares' sum, kLightingReuseBudget × the weight, times the
-// largest radiance a voxel reflects), the mean moves by far less (measured −0.022 % in G; the
-// benchmark's middle view, at 768×576, moves by −0.35 %, within the 0.5 % an approximation on by
-// default may), and the reuse saves both shadow queries and reflectance evaluations.
+// largest radiance a voxel reflects), the mean moves by far less (measured −0.097 % in G, −0.022 %
+// before a lit voxel's own leaf stopped shadowing it; the benchmark's middle view, at 768×576,
+// moves by −0.14 %, within the 0.5 % an approximation on by default may), and the reuse saves
+// both shadow queries and reflectance evaluations.
 // Far enough (a cell ≈ 22 px) that the volume, not the hybrid's mesh, draws most of the bushes.
 TEST(Approximations, LightingReuseStaysWithinItsBoundOnTheBushField) {
     const Scene scene = bushField(Eigen::Vector3d(0.5, 0.5, 0.4) + 2 * Eigen::Vector3d(1.28, -2.21, 1.2), 96);
@@ -97,7 +98,7 @@ TEST(Approximations, LightingReuseStaysWithinItsBoundOnTheBushField) {
               << ", shadow queries " << reused.stats.shadowRays << " vs " << exact.stats.shadowRays << "\n";
     EXPECT_GT(worst, 0);
     EXPECT_LE(worst, bound);
-    for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(c.bias[std::size_t(k)]), 5e-4) << "channel " << k;
+    for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(c.bias[std::size_t(k)]), 2e-3) << "channel " << k;
     EXPECT_LT(double(reused.stats.reflectanceEvaluations), 0.8 * double(exact.stats.reflectanceEvaluations));
     EXPECT_LT(double(reused.stats.shadowRays), 0.8 * double(exact.stats.shadowRays));
 }

@@ -289,6 +289,33 @@ TEST(LitFractions, APoissonMediumIsLitAsItsExponentialVolume) {
     EXPECT_LT(vtex::octree::measureLitFractions(*constant, hit, visible, 1, dense, 3, 16384).error(3, 3), -0.05);
 }
 
+// A lit-fraction measure's own factors (the renderer's queries from a lit voxel take its own
+// voxel's density times 1 − its own share): factors of 1 change no bit; a factor below 1 at one
+// shadow level lights more at that level only, and the more the smaller it is.
+TEST(LitFractions, AShadowRayTakesItsOwnVoxelTimesItsFactor) {
+    const auto constant = makeOctreeOf(3, 2.0f);
+    const auto hit = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) -> std::optional<double> {
+        const double s = -std::log(segmentHash(a, b)) / (1.3 * (b - a).norm());
+        return s <= 1 ? std::optional<double>(s) : std::nullopt;
+    };
+    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return !hit(a, b); };
+    const std::vector<double> scales(4, 0.65);
+    const auto measure = [&](const std::vector<double>& own) {
+        return vtex::octree::measureLitFractions(*constant, hit, visible, 1, scales, 3, 1024, 1, {}, own);
+    };
+    const auto none = measure({}), ones = measure({1, 1, 1, 1}), half = measure({1, 1, 1, 0.5}), zero = measure({1, 1, 1, 0});
+    for (std::size_t c = 0; c < 4; ++c)
+        for (std::size_t l = c == 0 ? 0 : c - 1; l < 4; ++l) {
+            EXPECT_EQ(ones.volume[c][l], none.volume[c][l]) << c << " " << l;
+            if (l < 3) {
+                EXPECT_EQ(half.volume[c][l], none.volume[c][l]) << c << " " << l;
+            } else {
+                EXPECT_GT(half.volume[c][l], none.volume[c][l] + 0.005) << c;
+                EXPECT_GT(zero.volume[c][l], half.volume[c][l] + 0.005) << c;
+            }
+        }
+}
+
 // Pairs left out of a lit-fraction measure (its `wanted` argument, which the renderer uses to skip
 // fine shadow levels' walks) are NaN; the others are what the whole measure gives, bit for bit.
 TEST(LitFractions, PairsLeftOutAreNotMeasuredAndTheOthersDoNotChange) {

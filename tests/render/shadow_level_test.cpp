@@ -175,5 +175,23 @@ TEST(ShadowLevels, FurShadowsStayWhereTheyAreCheapAndLitAsTheMesh) {
     EXPECT_LT(std::abs(bias), 0.055);
 }
 
+// Issue 12's self-shadowing: a lit voxel's query does not see the leaf it lights
+// (TexelRuntime::ownDepthFactor, own_share.h). The 2000-leaf bush at 64³ seen as the dense bush
+// above (footprint levels ≈ 3–4, shadows at level 3, 4 in the benchmark's field at 256³): its
+// leaves' light against the reference. The shares the load measured are the stats' own_shares, one
+// per level up to the mesh level, rising with the level (a finer voxel holds fewer leaves).
+TEST(ShadowLevels, ALitVoxelDoesNotShadowItsOwnLeaf) {
+    static const SourcedTexel bush = makeBush(2000, 64);
+    const auto [texelRender, bias] = renderLeaves(blackGroundField(bush, 14));
+    ASSERT_EQ(texelRender.stats.ownShares.size(), 1u);
+    const std::vector<double>& shares = texelRender.stats.ownShares[0];
+    std::cout << "leaves' light " << bias * 100 << " % (mean level " << texelRender.stats.meanLevel() << "; own shares";
+    for (const double s : shares) std::cout << " " << s;
+    std::cout << ")\n";
+    ASSERT_EQ(shares.size(), std::size_t(texelRender.stats.meshLevels[0]) + 1);
+    for (std::size_t l = 1; l < shares.size(); ++l) EXPECT_GT(shares[l], shares[l - 1]);
+    EXPECT_LT(std::abs(bias), 0.03);
+}
+
 }  // namespace
 }  // namespace vtex::render::test

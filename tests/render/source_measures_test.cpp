@@ -29,7 +29,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const Eigen::Vector3d kEye(2.2, -2.4, 2.0);  // footprints from the volume's levels to the mesh's
+const Eigen::Vector3d kEye(1.55, -1.3, 1.4);  // footprints from the volume's levels to the mesh's
 
 // `texel` with `measures` stored in a copy of its tree.
 SourcedTexel withMeasures(const SourcedTexel& texel, const vtex::octree::SourceMeasures& measures) {

@@ -81,6 +81,9 @@ struct SourceMeasures {
     std::int32_t meshLevel = 0;                             ///< the hybrid's mesh level
     std::vector<double> levelScales;         ///< one per level fitted, from level 0
     std::vector<std::int32_t> shadowLevels;  ///< one per footprint level below the coarsest shadow level
+    /// Per level from 0, the share of a voxel's matter on the surface piece a point of it lies on
+    /// (render's measureOwnShares), each in [0, 1]; empty in a record of revision 1.
+    std::vector<double> ownShares;
     friend bool operator==(const SourceMeasures&, const SourceMeasures&) = default;
 };
 

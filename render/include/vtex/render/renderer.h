@@ -172,6 +172,10 @@ struct RenderStats {
     /// measured for fitted levels (docs/render.md, "Shadows at the level that lights what is
     /// seen"; empty: the footprint's level, never coarser than the coarsest faithful one).
     std::vector<std::vector<int>> shadowLevels;
+    /// Per texel, the share of a voxel's matter on the surface piece a lit point of it lies on,
+    /// per level, which a camera march's shadow query takes off its own voxel (docs/render.md,
+    /// "A lit voxel's own leaf"; empty without a source).
+    std::vector<std::vector<double>> ownShares;
     /// Per texel: "stored" when the levels above came from the .vto (`vtex build --source`),
     /// "measured" when the load measured them against the source, "none" without a source.
     std::vector<std::string> sourceMeasures;

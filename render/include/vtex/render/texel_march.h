@@ -124,8 +124,10 @@ private:
 
 /// exp(−∫ τ ρ Â(ω) dL) along the straight reference-space segment from `from` to `to` (x and y
 /// wrap modulo 1, z is clamped to [0,1]) through `volume` at `level` (clamped to its deepest).
-/// Stops early once the transmittance is below `cutoff`.
+/// Stops early once the transmittance is below `cutoff`. `ownFactor` scales the density of the
+/// voxel `from` lies in, up to where the segment leaves it (a camera march's shadow query takes
+/// off the share of the surface piece it lights: TexelRuntime::ownDepthFactor).
 SegmentTransmittance marchTransmittance(const MarchVolume& volume, double tau, const Eigen::Vector3d& from,
-                                        const Eigen::Vector3d& to, int level, double cutoff = 0);
+                                        const Eigen::Vector3d& to, int level, double cutoff = 0, double ownFactor = 1);
 
 }  // namespace vtex::render

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross, in ClipPolygon::area
 
 #include <algorithm>
 #include <array>
