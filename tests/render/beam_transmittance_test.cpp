@@ -252,6 +252,23 @@ TEST(ChordTransmittance, ATauPerLevelIsTheOneTauMeasureAtThatTau) {
     EXPECT_LT(perLevel[3].transmittance, vtex::octree::measureChordTransmittance(tree, visible, 0.1, 512, 3)[3].transmittance);
 }
 
+namespace {
+
+// A Poisson "mesh" of extinction κ for the lit-fraction measures: a segment's first hit at an
+// exponential depth drawn from the segment's hash, so a segment is seen through with
+// probability e^(−κℓ) and the same segment always gives the same answer.
+vtex::octree::ChordFirstHit poissonHit(double kappa) {
+    return [kappa](const Eigen::Vector3d& a, const Eigen::Vector3d& b) -> std::optional<double> {
+        const double s = -std::log(segmentHash(a, b)) / (kappa * (b - a).norm());
+        return s <= 1 ? std::optional<double>(s) : std::nullopt;
+    };
+}
+vtex::octree::ChordVisibility poissonVisible(double kappa) {
+    return [hit = poissonHit(kappa)](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return !hit(a, b); };
+}
+
+}  // namespace
+
 // The lit fractions (octree::measureLitFractions) of a Poisson medium of extinction κ over a
 // constant texel whose fitted density is κ: the mesh's first hits lie where the march's weight
 // T·σ puts the volume's points (both exponential in depth at rate κ), and a Poisson medium lets
@@ -263,11 +280,8 @@ TEST(ChordTransmittance, ATauPerLevelIsTheOneTauMeasureAtThatTau) {
 TEST(LitFractions, APoissonMediumIsLitAsItsExponentialVolume) {
     const double rho = 2, kappa = 1.3;
     const auto constant = makeOctreeOf(3, float(rho));
-    const auto hit = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) -> std::optional<double> {
-        const double s = -std::log(segmentHash(a, b)) / (kappa * (b - a).norm());
-        return s <= 1 ? std::optional<double>(s) : std::nullopt;
-    };
-    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return !hit(a, b); };
+    const auto hit = poissonHit(kappa);
+    const auto visible = poissonVisible(kappa);
     const std::vector<double> scales(4, kappa / rho);
     const auto lit = vtex::octree::measureLitFractions(*constant, hit, visible, 1, scales, 3, 16384);
     ASSERT_EQ(lit.volume.size(), 4u);
@@ -294,11 +308,8 @@ TEST(LitFractions, APoissonMediumIsLitAsItsExponentialVolume) {
 // shadow level lights more at that level only, and the more the smaller it is.
 TEST(LitFractions, AShadowRayTakesItsOwnVoxelTimesItsFactor) {
     const auto constant = makeOctreeOf(3, 2.0f);
-    const auto hit = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) -> std::optional<double> {
-        const double s = -std::log(segmentHash(a, b)) / (1.3 * (b - a).norm());
-        return s <= 1 ? std::optional<double>(s) : std::nullopt;
-    };
-    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return !hit(a, b); };
+    const auto hit = poissonHit(1.3);
+    const auto visible = poissonVisible(1.3);
     const std::vector<double> scales(4, 0.65);
     const auto measure = [&](const std::vector<double>& own) {
         return vtex::octree::measureLitFractions(*constant, hit, visible, 1, scales, 3, 1024, 1, {}, own);
@@ -320,11 +331,8 @@ TEST(LitFractions, AShadowRayTakesItsOwnVoxelTimesItsFactor) {
 // fine shadow levels' walks) are NaN; the others are what the whole measure gives, bit for bit.
 TEST(LitFractions, PairsLeftOutAreNotMeasuredAndTheOthersDoNotChange) {
     const auto constant = makeOctreeOf(3, 2.0f);
-    const auto hit = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) -> std::optional<double> {
-        const double s = -std::log(segmentHash(a, b)) / (1.3 * (b - a).norm());
-        return s <= 1 ? std::optional<double>(s) : std::nullopt;
-    };
-    const auto visible = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return !hit(a, b); };
+    const auto hit = poissonHit(1.3);
+    const auto visible = poissonVisible(1.3);
     const std::vector<double> scales(4, 0.65);
     const auto all = vtex::octree::measureLitFractions(*constant, hit, visible, 1, scales, 3, 1024);
     const vtex::octree::LitPairs wanted = [](std::size_t c, std::size_t l) { return l <= 1 || l + 1 == c; };
