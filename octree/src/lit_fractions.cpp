@@ -46,20 +46,10 @@ Vec3 pointAtDepth(const ChordMedium& medium, std::uint32_t level, const Segments
 Segments toTheTop(const Vec3& p, const Vec3& up) { return detail::tiledSegments(p, up * (std::max(0.0, 1 - p.z()) / up.z())); }
 
 // The optical depth toward the top from p along `up` at `level`, the density of the voxel p lies
-// in times ownFactor up to where the ray leaves it (located a hair along the ray, as the
-// renderer's march locates a point on a face).
+// in times ownFactor up to where the ray leaves it (voxelExit).
 double shadowDepth(const ChordMedium& medium, std::uint32_t level, const Vec3& p, const Vec3& up, double ownFactor) {
     if (ownFactor == 1) return detail::chordDepth(medium, level, toTheTop(p, up));
-    const double n = std::ldexp(1.0, int(level)), invN = 1 / n;
-    const Vec3 q = p + (1e-7 * invN) * up;
-    double exit = std::max(0.0, 1 - p.z()) / up.z();
-    for (int a = 0; a < 3; ++a)
-        if (up[a] != 0) {
-            const double f = std::floor(q[a] * n);
-            exit = std::min(exit, ((up[a] > 0 ? f + 1 : f) * invN - p[a]) / up[a]);
-        }
-    exit = std::max(exit, 0.0);
-    const Vec3 end = p + exit * up;
+    const Vec3 end = p + voxelExit(p, up, int(level), std::max(0.0, 1 - p.z()) / up.z()) * up;
     return ownFactor * medium.depth(level, p, end) + detail::chordDepth(medium, level, toTheTop(end, up));
 }
 

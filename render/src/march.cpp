@@ -201,24 +201,6 @@ const LevelGrid* MarchVolume::grid(int level) const {
     return slot.grid.get();
 }
 
-namespace {
-
-// How far along the unit `dir` a segment from p (reference space) leaves the voxel of the
-// 2^level grid it starts in (located a hair along dir, as the march locates a point on a face).
-double voxelExit(const Eigen::Vector3d& p, const Eigen::Vector3d& dir, int level) {
-    const double n = std::ldexp(1.0, level), invN = 1 / n;
-    const Eigen::Vector3d q = p + (1e-7 * invN) * dir;
-    double exit = INFINITY;
-    for (int a = 0; a < 3; ++a) {
-        if (dir[a] == 0) continue;
-        const double f = std::floor(q[a] * n);
-        exit = std::min(exit, ((dir[a] > 0 ? f + 1 : f) * invN - p[a]) / dir[a]);
-    }
-    return std::max(exit, 0.0);
-}
-
-}  // namespace
-
 SegmentTransmittance marchTransmittance(const MarchVolume& volume, double tau, const Eigen::Vector3d& from,
                                         const Eigen::Vector3d& to, int level, double cutoff, double ownFactor) {
     SegmentTransmittance out;
@@ -231,7 +213,7 @@ SegmentTransmittance marchTransmittance(const MarchVolume& volume, double tau, c
     detail::ProfileFactor profile(volume, level, from, dir);
     // The own voxel's stretch: its density times ownFactor. A march visits runs of voxels that
     // share a stored node, so the stretch is marched apart from the rest.
-    const double own = ownFactor == 1 ? 0.0 : std::min(voxelExit(from, dir, std::min(level, volume.maxLevel())), length);
+    const double own = ownFactor == 1 ? 0.0 : octree::voxelExit(from, dir, std::min(level, volume.maxLevel()), length);
     if (own > 0) {
         out.blocks = detail::march(volume, level, from, dir, own, [&](const GridVoxel& voxel, double s, double ds) {
             opticalDepth += ownFactor * voxel.extinction(tau, dir) * ds * profile(s, ds);

@@ -11,7 +11,9 @@
 #include <vtex/primitive/packing.h>
 #include <vtex/primitive/sggx.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 
@@ -26,6 +28,22 @@ using primitive::Vec3;
 
 /// The deepest level a Morton key can name: 3·20 = 60 bits, 2^20 voxels per side.
 inline constexpr int kMaxLevel = 20;
+
+/// How far along the unit direction `dir` a ray from p (reference space, tiled or not) leaves the
+/// voxel of `level` it starts in, at most `limit`: p is located a hair along dir (1e-7 of a
+/// voxel), so that a point on a face starts in the voxel the ray enters, as a march locates it.
+/// What a shadow query from a lit voxel counts as its own voxel (the renderer's own-leaf share).
+inline double voxelExit(const Vec3& p, const Vec3& dir, int level, double limit) {
+    const double n = std::ldexp(1.0, level), invN = 1 / n;
+    const Vec3 q = p + (1e-7 * invN) * dir;
+    double exit = limit;
+    for (int a = 0; a < 3; ++a)
+        if (dir[a] != 0) {
+            const double f = std::floor(q[a] * n);
+            exit = std::min(exit, ((dir[a] > 0 ? f + 1 : f) * invN - p[a]) / dir[a]);
+        }
+    return std::max(exit, 0.0);
+}
 
 /// Interleaves the low 20 bits of x, y, z into a Morton key: bit 3i is x's bit i, 3i+1 y's,
 /// 3i+2 z's. The 8 children of the node with key k have the keys 8k … 8k+7, child c at
