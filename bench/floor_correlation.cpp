@@ -5,7 +5,8 @@
 // view sees its ground lit 11 % too often). For uniform points of the floor of the texel tiled in
 // x and y, with the view direction V (floor to eye) and the light direction L (floor to light):
 // the mesh's P(seen), P(lit), P(seen and lit); per camera level c the volume's E[t_c], and with
-// the shadow level's t_l (the levels' fitted factors, as a render takes them) E[t_c t_l] and the
+// the shadow level's t_l (the levels' factors as a render's load fits them, render::measureSource:
+// the levels it marches) E[t_c t_l] and the
 // correlation coefficient r_c that would make E[t_c t_l + r √(t_c(1−t_c) t_l(1−t_l))] the mesh's
 // P(seen and lit).
 //   usage: vtex_floor_correlation TEXEL.vto SOURCE_MESH VX VY VZ LX LY LZ [SHADOW_LEVEL] [POINTS]
@@ -44,10 +45,10 @@ int main(int argc, char** argv) {
         const ingest::TriangleMesh mesh = ingest::loadMesh(argv[2]);
         const render::SourceVisibility source(mesh, tree->info.source);
         const octree::ChordVisibility visible = [&](const Vec3& a, const Vec3& b) { return source.visible(a, b); };
-        std::vector<double> scales;
-        for (const auto& fit : octree::fitShellChords(*tree, visible, 1.0, render::kLevelFitChords, 1)) scales.push_back(fit.scale);
+        const std::vector<double> scales =
+            render::measureSource(*tree, mesh, 1.0, render::RenderOptions{}.hybridTolerance).levelScales;
         const octree::ChordMedium medium(*tree);
-        const int levels = std::min<int>(int(scales.size()), 6);
+        const int levels = int(scales.size());
         if (shadowLevel < 0 || shadowLevel >= int(scales.size())) {
             std::fprintf(stderr, "no fitted level %d\n", shadowLevel);
             return 2;

@@ -46,11 +46,11 @@ Vec3 pointAtDepth(const ChordMedium& medium, std::uint32_t level, const Segments
 Segments toTheTop(const Vec3& p, const Vec3& up) { return detail::tiledSegments(p, up * (std::max(0.0, 1 - p.z()) / up.z())); }
 
 // The optical depth toward the top from p along `up` at `level`, the density of the voxel p lies
-// in times ownFactor up to where the ray leaves it (voxelExit).
-double shadowDepth(const ChordMedium& medium, std::uint32_t level, const Vec3& p, const Vec3& up, double ownFactor) {
-    if (ownFactor == 1) return detail::chordDepth(medium, level, toTheTop(p, up));
+// in times 1 − ownShare up to where the ray leaves it (voxelExit).
+double shadowDepth(const ChordMedium& medium, std::uint32_t level, const Vec3& p, const Vec3& up, double ownShare) {
+    if (ownShare == 0) return detail::chordDepth(medium, level, toTheTop(p, up));
     const Vec3 end = p + voxelExit(p, up, int(level), std::max(0.0, 1 - p.z()) / up.z()) * up;
-    return ownFactor * medium.depth(level, p, end) + detail::chordDepth(medium, level, toTheTop(end, up));
+    return (1 - ownShare) * medium.depth(level, p, end) + detail::chordDepth(medium, level, toTheTop(end, up));
 }
 
 // What one chord gives: whether the mesh sees a surface there and lights it; per camera level the
@@ -65,7 +65,7 @@ struct ChordLight {
 LitFractions measureLitFractions(const ChordMedium& medium, const ChordFirstHit& hit, const ChordVisibility& visible,
                                  double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
                                  int chords, std::uint64_t seed, const LitPairs& wanted,
-                                 const std::vector<double>& ownFactors) {
+                                 const std::vector<double>& ownShares) {
     const Octree& tree = medium.tree();
     const std::size_t levels = std::min(scales.size(), tree.levels.size());
     // Camera level c needs shadow levels c − 1 and finer: none past finestShadowLevel.
@@ -104,7 +104,7 @@ LitFractions measureLitFractions(const ChordMedium& medium, const ChordFirstHit&
                 const Vec3 p = pointAtDepth(medium, std::uint32_t(c), chord, scale, -std::log1p(-u * alpha));
                 for (std::size_t l = firstShadow(c); l < shadowEnd; ++l)
                     if (measured(c, l)) {
-                        const double own = l < ownFactors.size() ? ownFactors[l] : 1.0;
+                        const double own = l < ownShares.size() ? ownShares[l] : 0.0;
                         t.shadow[c * levels + l] = std::exp(-tau * scales[l] * shadowDepth(medium, std::uint32_t(l), p, light, own));
                     }
             }

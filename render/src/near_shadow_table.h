@@ -57,7 +57,9 @@ inline OwnVoxel ownVoxel(const MarchVolume& volume, const LevelGrid& grid, doubl
                          const Vec3& lr, const Vec3& inverse, double maxStep, double ownFactor = 1) {
     OwnVoxel o;
     const double n = double(grid.n), invN = 1 / n;
-    // Located a hair along the ray, as the march locates a point on a voxel face.
+    // Located a hair along the ray, as the march locates a point on a voxel face: octree::voxelExit's
+    // rule, written out here for the face it leaves by and with lr's reciprocal kept (every camera
+    // march's shadow query on a flat field comes through here).
     const Vec3 p = p0 + (1e-7 * invN) * lr;
     double exit = std::numeric_limits<double>::infinity();
     for (int a = 0; a < 3; ++a) {

@@ -119,10 +119,8 @@ MeasuredLighting measureLighting(const octree::ChordMedium& medium, const Source
     const std::size_t finest = std::max(std::size_t(std::max(faithful.finest, 0)), coarsest);
     const octree::LitPairs wanted = [&](std::size_t c, std::size_t l) { return l <= coarsest || l + 1 == c; };
     // The volume's shadow rays as the renderer's from a lit voxel: its own voxel less the piece it lights.
-    std::vector<double> ownFactors(ownShares.size());
-    std::transform(ownShares.begin(), ownShares.end(), ownFactors.begin(), [](double s) { return 1 - s; });
     const octree::LitFractions lit =
-        octree::measureLitFractions(medium, hit, visible, tau, scales, finest, kLoadChords, 1, wanted, ownFactors);
+        octree::measureLitFractions(medium, hit, visible, tau, scales, finest, kLoadChords, 1, wanted, ownShares);
     const double margin = 2 * lit.meshStandardError();
     MeasuredLighting out{shadowLevelsFrom(lit, faithful.coarsest, margin, NearShadowTable::kMaxLevel), faithful.finest};
     out.meshLevel = meshLevelFrom(lit, out.shadowLevels, faithful, margin);

@@ -79,7 +79,8 @@ TEST(Approximations, DefaultsMoveTheBushFieldMeanByAtMostHalfAPercent) {
 // stays within the bound (the reused shares' sum, kLightingReuseBudget × the weight, times the
 // largest radiance a voxel reflects), the mean moves by far less (measured −0.097 % in G, −0.022 %
 // before a lit voxel's own leaf stopped shadowing it; the benchmark's middle view, at 768×576,
-// moves by −0.14 %, within the 0.5 % an approximation on by default may), and the reuse saves
+// moves by −0.14 % with a throw-away switch for the weight, within the 0.5 % an approximation on by
+// default may), and the reuse saves
 // both shadow queries and reflectance evaluations.
 // Far enough (a cell ≈ 22 px) that the volume, not the hybrid's mesh, draws most of the bushes.
 TEST(Approximations, LightingReuseStaysWithinItsBoundOnTheBushField) {

@@ -303,26 +303,26 @@ TEST(LitFractions, APoissonMediumIsLitAsItsExponentialVolume) {
     EXPECT_LT(vtex::octree::measureLitFractions(*constant, hit, visible, 1, dense, 3, 16384).error(3, 3), -0.05);
 }
 
-// A lit-fraction measure's own factors (the renderer's queries from a lit voxel take its own
-// voxel's density times 1 − its own share): factors of 1 change no bit; a factor below 1 at one
-// shadow level lights more at that level only, and the more the smaller it is.
-TEST(LitFractions, AShadowRayTakesItsOwnVoxelTimesItsFactor) {
+// A lit-fraction measure's own shares (the renderer's queries from a lit voxel take its own
+// voxel's density times 1 − its own share): shares of 0 change no bit; a share above 0 at one
+// shadow level lights more at that level only, and the more the larger it is.
+TEST(LitFractions, AShadowRayTakesItsOwnVoxelLessItsShare) {
     const auto constant = makeOctreeOf(3, 2.0f);
     const auto hit = poissonHit(1.3);
     const auto visible = poissonVisible(1.3);
     const std::vector<double> scales(4, 0.65);
-    const auto measure = [&](const std::vector<double>& own) {
-        return vtex::octree::measureLitFractions(*constant, hit, visible, 1, scales, 3, 1024, 1, {}, own);
+    const auto measure = [&](const std::vector<double>& shares) {
+        return vtex::octree::measureLitFractions(*constant, hit, visible, 1, scales, 3, 1024, 1, {}, shares);
     };
-    const auto none = measure({}), ones = measure({1, 1, 1, 1}), half = measure({1, 1, 1, 0.5}), zero = measure({1, 1, 1, 0});
+    const auto none = measure({}), zeros = measure({0, 0, 0, 0}), half = measure({0, 0, 0, 0.5}), all = measure({0, 0, 0, 1});
     for (std::size_t c = 0; c < 4; ++c)
         for (std::size_t l = c == 0 ? 0 : c - 1; l < 4; ++l) {
-            EXPECT_EQ(ones.volume[c][l], none.volume[c][l]) << c << " " << l;
+            EXPECT_EQ(zeros.volume[c][l], none.volume[c][l]) << c << " " << l;
             if (l < 3) {
                 EXPECT_EQ(half.volume[c][l], none.volume[c][l]) << c << " " << l;
             } else {
                 EXPECT_GT(half.volume[c][l], none.volume[c][l] + 0.005) << c;
-                EXPECT_GT(zero.volume[c][l], half.volume[c][l] + 0.005) << c;
+                EXPECT_GT(all.volume[c][l], half.volume[c][l] + 0.005) << c;
             }
         }
 }

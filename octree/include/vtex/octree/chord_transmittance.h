@@ -124,10 +124,11 @@ using ChordFirstHit = std::function<std::optional<double>(const Vec3& a, const V
 /// camera and shadow levels up to finestShadowLevel, all below scales.size() and the tree's levels,
 /// shadow levels from c − 1 (a shadow's cone is never narrower than its camera ray's; NaN
 /// elsewhere), and of those only the pairs (c, l) `wanted` says (all when empty; NaN for the
-/// others: a fine shadow level's walks are most of the cost). `ownFactors[l]`, when given, scales
-/// the density of the level-l voxel a shadow ray starts in, up to where it leaves it, as the
-/// renderer's queries from a lit voxel do (the piece it lights does not shadow it). A pure
-/// function of `seed`, whatever the thread count.
+/// others: a fine shadow level's walks are most of the cost). `ownShares[l]`, when given (as
+/// SourceMeasures::ownShares), is taken off the density of the level-l voxel a shadow ray starts
+/// in, up to where it leaves it (its density times 1 − share), as the renderer's queries from a
+/// lit voxel do: the piece it lights does not shadow it. A pure function of `seed`, whatever the
+/// thread count.
 struct LitFractions {
     double mesh = 1;                          ///< fraction of the mesh's seen points that are lit
     std::size_t seen = 0;                     ///< chords whose first surface the mesh shows
@@ -140,7 +141,7 @@ using LitPairs = std::function<bool(std::size_t camera, std::size_t shadow)>;
 LitFractions measureLitFractions(const ChordMedium& medium, const ChordFirstHit& hit, const ChordVisibility& visible,
                                  double tau, const std::vector<double>& scales, std::size_t finestShadowLevel,
                                  int chords, std::uint64_t seed = 1, const LitPairs& wanted = {},
-                                 const std::vector<double>& ownFactors = {});
+                                 const std::vector<double>& ownShares = {});
 
 /// Visits the non-empty voxels of `level` that the segment a → b (inside the unit cube) crosses,
 /// front to back, as visit(node that stands for the voxel, t0, t1) with [t0, t1] the distances
