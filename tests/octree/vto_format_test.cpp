@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <limits>
 #include <random>
+#include <utility>
 
 namespace vtex::octree {
 namespace {
@@ -229,34 +230,24 @@ TEST(VtoFormat, ImpossibleSourceMeasuresAreRefused) {
         tree.measures = m;
         return refusalOf(tree);
     };
-    const auto refusedAtMeas = [&](const SourceMeasures& m) { return refusal(m).find("section 'MEAS'") == 0; };
-    SourceMeasures m = sampleMeasures();
-    m.meshLevel = 4;  // the tree has levels 0–3
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
-    m = sampleMeasures();
-    m.shadowLevels = {-1};
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
-    m = sampleMeasures();
-    m.levelScales[1] = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
-    m = sampleMeasures();
-    m.levelScales.assign(5, 1.0);  // more scales than levels
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
-    m = sampleMeasures();
-    m.ownShares[2] = 1.5;  // a share is a fraction
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
-    m = sampleMeasures();
-    m.ownShares[0] = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
-    m = sampleMeasures();
-    m.ownShares.assign(5, 0.5);  // more shares than levels
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
-    m = sampleMeasures();
-    m.tau = 0;
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
-    m = sampleMeasures();
-    m.tolerance = -1;
-    EXPECT_TRUE(refusedAtMeas(m)) << refusal(m);
+    // Each case breaks one field of a valid record.
+    using Break = void (*)(SourceMeasures&);
+    const std::pair<const char*, Break> cases[] = {
+        {"mesh level past the tree's levels 0–3", [](SourceMeasures& m) { m.meshLevel = 4; }},
+        {"negative shadow level", [](SourceMeasures& m) { m.shadowLevels = {-1}; }},
+        {"NaN level scale", [](SourceMeasures& m) { m.levelScales[1] = std::numeric_limits<double>::quiet_NaN(); }},
+        {"more scales than levels", [](SourceMeasures& m) { m.levelScales.assign(5, 1.0); }},
+        {"a share past 1", [](SourceMeasures& m) { m.ownShares[2] = 1.5; }},
+        {"NaN share", [](SourceMeasures& m) { m.ownShares[0] = std::numeric_limits<double>::quiet_NaN(); }},
+        {"more shares than levels", [](SourceMeasures& m) { m.ownShares.assign(5, 0.5); }},
+        {"tau 0", [](SourceMeasures& m) { m.tau = 0; }},
+        {"negative tolerance", [](SourceMeasures& m) { m.tolerance = -1; }},
+    };
+    for (const auto& [what, breakIt] : cases) {
+        SourceMeasures m = sampleMeasures();
+        breakIt(m);
+        EXPECT_EQ(refusal(m).find("section 'MEAS'"), 0u) << what << ": " << refusal(m);
+    }
     EXPECT_EQ(refusal(sampleMeasures()), "accepted");
     // openVto checks the record when it opens the file, before any level.
     Octree tree = smallOctree();
