@@ -122,28 +122,20 @@ struct VertexKeyHash {
     }
 };
 
-}  // namespace
+using Triangle = std::array<std::uint32_t, 3>;
 
-TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const IngestOptions& options,
-                        IngestReport& report) {
-    RepairCounts& counts = report.repairs;
-    counts = raw.repairs;
-    report.warnings = std::move(raw.warnings);
-    report.verticesIn = raw.positions.size();
-    report.trianglesIn = raw.triangles.size() + counts.invalidIndexFaces;
-    const std::size_t n = raw.positions.size();
-    if (!raw.normals.empty() && raw.normals.size() != n) raw.normals.clear();
-    if (!raw.uvs.empty() && raw.uvs.size() != n) raw.uvs.clear();
-    if (raw.triangleMaterials.size() != raw.triangles.size()) raw.triangleMaterials.clear();
-    if (raw.triangles.empty())
-        throw InputError(file, counts.invalidIndexFaces ? "no valid triangle (every face had an index out of range)"
-                                                        : "no triangles (points, lines or empty geometry only)");
-
-    // Faces that use a NaN/Inf coordinate.
-    std::vector<char> used(n, 0);
-    std::vector<std::array<std::uint32_t, 3>> faces;
-    std::vector<std::uint32_t> faceMaterials;
-    faces.reserve(raw.triangles.size());
+// The faces whose three corners are finite, with their materials and which vertices they use; a
+// face with a NaN/Inf corner refuses the file, or is counted and dropped with --drop-invalid.
+struct FiniteFaces {
+    std::vector<Triangle> faces;
+    std::vector<std::uint32_t> materials;
+    std::vector<char> used;  ///< per raw vertex
+};
+FiniteFaces finiteFaces(const RawMesh& raw, const std::filesystem::path& file, const IngestOptions& options,
+                        RepairCounts& counts) {
+    FiniteFaces out;
+    out.used.assign(raw.positions.size(), 0);
+    out.faces.reserve(raw.triangles.size());
     for (std::size_t t = 0; t < raw.triangles.size(); ++t) {
         const auto& tri = raw.triangles[t];
         bool finite = true;
@@ -159,19 +151,33 @@ TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const 
             ++counts.nonFiniteFaces;
             continue;
         }
-        for (std::uint32_t v : tri) used[v] = 1;
-        faces.push_back(tri);
-        faceMaterials.push_back(raw.triangleMaterials.empty() ? 0 : raw.triangleMaterials[t]);
+        for (std::uint32_t v : tri) out.used[v] = 1;
+        out.faces.push_back(tri);
+        out.materials.push_back(raw.triangleMaterials.empty() ? 0 : raw.triangleMaterials[t]);
     }
-    if (faces.empty()) throw InputError(file, "no valid triangle (every face used a NaN or infinite coordinate)");
+    if (out.faces.empty()) throw InputError(file, "no valid triangle (every face used a NaN or infinite coordinate)");
+    return out;
+}
 
+// The faces left after welding the used vertices (relative to the bounding box's diagonal) and
+// dropping the degenerate and zero-area ones, each by its raw corners (`raw`, for the file's
+// UVs and normals) and by its welded vertices (`welded`, indices into `points`).
+struct WeldedFaces {
+    std::vector<Triangle> raw;
+    std::vector<Triangle> welded;
+    std::vector<std::uint32_t> materials;
+    std::vector<Eigen::Vector3d> points;  ///< the welded vertices that some kept face uses
+};
+WeldedFaces weldFaces(const RawMesh& mesh, const FiniteFaces& finite, const std::filesystem::path& file,
+                      const IngestOptions& options, RepairCounts& counts) {
+    const std::size_t n = mesh.positions.size();
     // Bounding box of what is used, in double.
     std::vector<Eigen::Vector3d> points(n);
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
     Eigen::Vector3d hi = -lo;
     for (std::size_t i = 0; i < n; ++i) {
-        points[i] = raw.positions[i].cast<double>();
-        if (!used[i]) continue;
+        points[i] = mesh.positions[i].cast<double>();
+        if (!finite.used[i]) continue;
         lo = lo.cwiseMin(points[i]);
         hi = hi.cwiseMax(points[i]);
     }
@@ -179,20 +185,17 @@ TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const 
     if (!(diagonal > 0) || !std::isfinite(diagonal))
         throw InputError(file, "every triangle is degenerate (the mesh has no extent)");
 
-    // Weld, then drop degenerate and zero-area faces.
     const double tolerance = options.weldTolerance * diagonal;
-    const std::vector<std::uint32_t> rep = weldVertices(points, used, lo, tolerance, diagonal);
+    const std::vector<std::uint32_t> rep = weldVertices(points, finite.used, lo, tolerance, diagonal);
     for (std::size_t i = 0; i < n; ++i)
-        if (used[i] && rep[i] != i) ++counts.mergedVertices;
+        if (finite.used[i] && rep[i] != i) ++counts.mergedVertices;
     // A triangle whose doubled area is at most tolerance² has no area at the mesh's scale (with
     // a zero tolerance: exactly zero).
     const double minDoubleArea = tolerance * tolerance;
-    std::vector<std::array<std::uint32_t, 3>> kept;   // raw vertex indices
-    std::vector<std::array<std::uint32_t, 3>> welded; // representative indices
-    std::vector<std::uint32_t> keptMaterials;
-    for (std::size_t t = 0; t < faces.size(); ++t) {
-        const auto& f = faces[t];
-        const std::array<std::uint32_t, 3> w{rep[f[0]], rep[f[1]], rep[f[2]]};
+    WeldedFaces out;
+    for (std::size_t t = 0; t < finite.faces.size(); ++t) {
+        const Triangle& f = finite.faces[t];
+        const Triangle w{rep[f[0]], rep[f[1]], rep[f[2]]};
         if (w[0] == w[1] || w[1] == w[2] || w[0] == w[2]) {
             ++counts.degenerateFaces;
             continue;
@@ -202,82 +205,86 @@ TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const 
             ++counts.zeroAreaFaces;
             continue;
         }
-        kept.push_back(f);
-        welded.push_back(w);
-        keptMaterials.push_back(faceMaterials[t]);
+        out.raw.push_back(f);
+        out.welded.push_back(w);
+        out.materials.push_back(finite.materials[t]);
     }
-    if (kept.empty())
+    if (out.raw.empty())
         throw InputError(file, "no valid triangle left: " + std::to_string(counts.degenerateFaces) +
                                    " degenerate and " + std::to_string(counts.zeroAreaFaces) +
                                    " zero-area faces removed");
-    faces.clear();
-    faces.shrink_to_fit();
-
-    // Compact the representatives into the welded vertex set.
+    // Compact the representatives into the welded vertex set, in order of first use.
     std::vector<std::uint32_t> compact(n, kNone);
-    std::vector<Eigen::Vector3d> weldedPoints;
-    for (auto& w : welded)
+    for (auto& w : out.welded)
         for (auto& v : w) {
             if (compact[v] == kNone) {
-                compact[v] = std::uint32_t(weldedPoints.size());
-                weldedPoints.push_back(points[v]);
+                compact[v] = std::uint32_t(out.points.size());
+                out.points.push_back(points[v]);
             }
             v = compact[v];
         }
+    return out;
+}
 
-    // Closed meshes: orient outward (CGAL), else keep the file's winding.
-    bool closed = isEdgeClosed(welded);
-    if (closed) {
-        if (options.orientClosed) {
-            if (auto flips = computeOutwardFlips(weldedPoints, welded)) {
-                for (std::size_t t = 0; t < welded.size(); ++t)
-                    if ((*flips)[t]) {
-                        std::swap(welded[t][1], welded[t][2]);
-                        std::swap(kept[t][1], kept[t][2]);
-                        ++counts.flippedFaces;
-                    }
-            } else {
-                closed = false;
-                report.warnings.push_back("closed but not orientable as a volume; winding kept");
-            }
-        } else {
-            closed = isConsistentlyWound(welded);
-        }
+// Whether the welded mesh is closed; a closed one is turned outward (CGAL) when the options ask
+// for it, else the file's winding is kept and it counts as closed only if consistently wound.
+bool orientClosed(WeldedFaces& faces, const IngestOptions& options, RepairCounts& counts,
+                  std::vector<std::string>& warnings) {
+    if (!isEdgeClosed(faces.welded)) return false;
+    if (!options.orientClosed) return isConsistentlyWound(faces.welded);
+    const auto flips = computeOutwardFlips(faces.points, faces.welded);
+    if (!flips) {
+        warnings.push_back("closed but not orientable as a volume; winding kept");
+        return false;
     }
+    for (std::size_t t = 0; t < faces.welded.size(); ++t)
+        if ((*flips)[t]) {
+            std::swap(faces.welded[t][1], faces.welded[t][2]);
+            std::swap(faces.raw[t][1], faces.raw[t][2]);
+            ++counts.flippedFaces;
+        }
+    return true;
+}
 
-    // Area-weighted normals of the welded vertices.
-    std::vector<Eigen::Vector3d> areaNormals(weldedPoints.size(), Eigen::Vector3d::Zero());
-    std::vector<Eigen::Vector3d> anyFaceNormal(weldedPoints.size(), Eigen::Vector3d::Zero());
-    for (const auto& w : welded) {
-        const Eigen::Vector3d c =
-            (weldedPoints[w[1]] - weldedPoints[w[0]]).cross(weldedPoints[w[2]] - weldedPoints[w[0]]);
+// Area-weighted normals of the welded vertices; where opposite faces cancel out, any incident
+// face's normal; +Z for a vertex with neither.
+std::vector<Eigen::Vector3f> weldedNormals(const WeldedFaces& faces) {
+    std::vector<Eigen::Vector3d> areaNormals(faces.points.size(), Eigen::Vector3d::Zero());
+    std::vector<Eigen::Vector3d> anyFaceNormal(faces.points.size(), Eigen::Vector3d::Zero());
+    for (const auto& w : faces.welded) {
+        const Eigen::Vector3d c = (faces.points[w[1]] - faces.points[w[0]]).cross(faces.points[w[2]] - faces.points[w[0]]);
         for (auto v : w) {
             areaNormals[v] += c;  // |c| is twice the area: weights by area
             anyFaceNormal[v] = c;
         }
     }
-    auto computedNormal = [&](std::uint32_t v) -> Eigen::Vector3f {
+    std::vector<Eigen::Vector3f> normals(faces.points.size());
+    for (std::size_t v = 0; v < normals.size(); ++v) {
         double length = areaNormals[v].norm();
-        if (length > 0 && std::isfinite(length)) return (areaNormals[v] / length).cast<float>();
-        // Opposite faces cancelled out: any incident face's normal will do.
-        length = anyFaceNormal[v].norm();
-        if (length > 0 && std::isfinite(length)) return (anyFaceNormal[v] / length).cast<float>();
-        return Eigen::Vector3f::UnitZ();
-    };
+        if (length > 0 && std::isfinite(length)) normals[v] = (areaNormals[v] / length).cast<float>();
+        else if (length = anyFaceNormal[v].norm(); length > 0 && std::isfinite(length))
+            normals[v] = (anyFaceNormal[v] / length).cast<float>();
+        else normals[v] = Eigen::Vector3f::UnitZ();
+    }
+    return normals;
+}
 
-    // Output vertices: one per distinct (welded position, UV, file normal).
-    TriangleMesh mesh;
+// The output's vertices and triangles: one vertex per distinct (welded position, UV, file
+// normal). A file normal is kept, turned to the side of the computed one (counted); a missing
+// or unusable one is the computed normal (counted).
+void emitVertices(const RawMesh& raw, const WeldedFaces& faces, const std::vector<Eigen::Vector3f>& computed,
+                  TriangleMesh& mesh, RepairCounts& counts) {
     const bool hasUvs = !raw.uvs.empty();
     const bool hasNormals = !raw.normals.empty();
     std::unordered_map<VertexKey, std::uint32_t, VertexKeyHash> outputIndex;
     std::vector<std::uint32_t> directIndex;
-    if (!hasUvs && !hasNormals) directIndex.assign(weldedPoints.size(), kNone);
-    else outputIndex.reserve(weldedPoints.size() * 2);
-    mesh.triangles.resize(kept.size());
-    for (std::size_t t = 0; t < kept.size(); ++t) {
+    if (!hasUvs && !hasNormals) directIndex.assign(faces.points.size(), kNone);
+    else outputIndex.reserve(faces.points.size() * 2);
+    mesh.triangles.resize(faces.raw.size());
+    for (std::size_t t = 0; t < faces.raw.size(); ++t) {
         for (int k = 0; k < 3; ++k) {
-            const std::uint32_t source = kept[t][k];
-            const std::uint32_t w = welded[t][k];
+            const std::uint32_t source = faces.raw[t][k];
+            const std::uint32_t w = faces.welded[t][k];
             std::uint32_t* slot;
             if (!directIndex.empty()) {
                 slot = &directIndex[w];
@@ -297,17 +304,16 @@ TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const 
             }
             if (*slot == kNone) {
                 *slot = std::uint32_t(mesh.positions.size());
-                mesh.positions.push_back(weldedPoints[w].cast<float>());
-                const Eigen::Vector3f geometric = computedNormal(w);
+                mesh.positions.push_back(faces.points[w].cast<float>());
                 Eigen::Vector3f normal = hasNormals ? raw.normals[source] : Eigen::Vector3f::Zero();
                 if (normal.allFinite() && normal.squaredNorm() >= 1e-12f) {
                     normal.normalize();
-                    if (normal.dot(geometric) < 0) {
+                    if (normal.dot(computed[w]) < 0) {
                         normal = -normal;
                         ++counts.flippedNormals;
                     }
                 } else {
-                    normal = geometric;
+                    normal = computed[w];
                     ++counts.recomputedNormals;
                 }
                 mesh.normals.push_back(normal);
@@ -319,31 +325,27 @@ TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const 
             mesh.triangles[t][k] = *slot;
         }
     }
-    std::vector<char> referenced(n, 0);
-    for (const auto& f : kept)
-        for (auto v : f) referenced[v] = 1;
-    // Plus what a reader already knew (OBJ `v` lines no face used never became raw vertices).
-    counts.unreferencedVertices += std::uint64_t(std::count(referenced.begin(), referenced.end(), 0));
+}
 
-    // Materials and textures travel unchanged; at least one material.
+// Materials and textures travel unchanged; at least one material, per-face materials only when
+// there are several, texture references only where they resolve and the mesh has UVs.
+void carryMaterials(RawMesh& raw, std::vector<std::uint32_t> faceMaterials, TriangleMesh& mesh) {
     mesh.materials = std::move(raw.materials);
     mesh.textures = std::move(raw.textures);
     if (mesh.materials.empty()) mesh.materials.emplace_back();
-    for (auto& m : keptMaterials)
+    for (auto& m : faceMaterials)
         if (m >= mesh.materials.size()) m = 0;
-    if (mesh.materials.size() > 1) mesh.triangleMaterials = std::move(keptMaterials);
+    if (mesh.materials.size() > 1) mesh.triangleMaterials = std::move(faceMaterials);
     for (auto& material : mesh.materials)
-        if (material.baseColorTexture >= int(mesh.textures.size())) material.baseColorTexture = -1;
-    if (!hasUvs)
-        for (auto& material : mesh.materials) material.baseColorTexture = -1;
-    mesh.closed = closed;
+        if (material.baseColorTexture >= int(mesh.textures.size()) || raw.uvs.empty()) material.baseColorTexture = -1;
+}
 
-    // Report.
+void reportOutput(const TriangleMesh& mesh, IngestReport& report) {
     report.verticesOut = mesh.positions.size();
     report.trianglesOut = mesh.triangles.size();
     report.materials = mesh.materials.size();
     report.textures = mesh.textures.size();
-    report.closed = closed;
+    report.closed = mesh.closed;
     Eigen::Vector3f outLo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
     Eigen::Vector3f outHi = -outLo;
     for (const auto& p : mesh.positions) {
@@ -352,6 +354,37 @@ TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const 
     }
     report.boundsMin = outLo;
     report.boundsMax = outHi;
+}
+
+}  // namespace
+
+TriangleMesh repairMesh(RawMesh&& raw, const std::filesystem::path& file, const IngestOptions& options,
+                        IngestReport& report) {
+    RepairCounts& counts = report.repairs;
+    counts = raw.repairs;
+    report.warnings = std::move(raw.warnings);
+    report.verticesIn = raw.positions.size();
+    report.trianglesIn = raw.triangles.size() + counts.invalidIndexFaces;
+    const std::size_t n = raw.positions.size();
+    if (!raw.normals.empty() && raw.normals.size() != n) raw.normals.clear();
+    if (!raw.uvs.empty() && raw.uvs.size() != n) raw.uvs.clear();
+    if (raw.triangleMaterials.size() != raw.triangles.size()) raw.triangleMaterials.clear();
+    if (raw.triangles.empty())
+        throw InputError(file, counts.invalidIndexFaces ? "no valid triangle (every face had an index out of range)"
+                                                        : "no triangles (points, lines or empty geometry only)");
+
+    WeldedFaces faces = weldFaces(raw, finiteFaces(raw, file, options, counts), file, options, counts);
+    TriangleMesh mesh;
+    mesh.closed = orientClosed(faces, options, counts, report.warnings);
+    emitVertices(raw, faces, weldedNormals(faces), mesh, counts);
+    // Raw vertices no kept face uses, plus what a reader already knew (OBJ `v` lines no face
+    // used never became raw vertices).
+    std::vector<char> referenced(n, 0);
+    for (const auto& f : faces.raw)
+        for (auto v : f) referenced[v] = 1;
+    counts.unreferencedVertices += std::uint64_t(std::count(referenced.begin(), referenced.end(), 0));
+    carryMaterials(raw, std::move(faces.materials), mesh);
+    reportOutput(mesh, report);
     if (mesh.triangles.size() > options.maxTriangles)
         throw InputError(file, "more than " + std::to_string(options.maxTriangles) +
                                    " triangles (see --max-triangles)");
