@@ -26,67 +26,99 @@ render::SourceFidelity measuresAgainstSource(const octree::Octree& tree, const s
     return render::measureSourceFidelity(tree, ingest::loadMesh(source));
 }
 
-void inspectVto(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out) {
-    const bool json = options.json;
-    const std::string bytes = octree::readFileBytes(file);
-    const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTO", 8), octree::kVtoVersion);
-    if (!check.problem.empty()) {
-        if (json) out << nlohmann::json{{"file", file.string()}, {"checksums", checksumsJson(check)}}.dump() << '\n';
-        else printChecksums(check, out);
-    }
-    const octree::Octree tree = octree::parseVto(bytes, file);  // throws on any problem
+// The whole report as one JSON line.
+void writeVtoJson(const std::filesystem::path& file, const octree::FileCheck& check, const octree::Octree& tree,
+                  const render::SourceFidelity& measures, std::ostream& out) {
     const auto& info = tree.info;
-    const render::SourceFidelity measures = measuresAgainstSource(tree, options.source);
-    if (json) {
-        nlohmann::json levels = nlohmann::json::array();
-        for (std::uint32_t l = 0; l < tree.levelCount(); ++l) {
-            const auto& s = tree.stats[l];
-            levels.push_back({{"level", l},
-                              {"chords_against_source", fidelityJson(measures, l)},
-                              {"resolution", 1u << l},
-                              {"stored_nodes", s.storedNodes},
-                              {"occupied_nodes", s.occupiedNodes},
-                              {"mean_density", jsonNumber(s.meanDensity)},
-                              {"mean_occupied_density", jsonNumber(s.meanOccupiedDensity)},
-                              {"filter_error", {{"mean", jsonNumber(s.filterErrorMean)},
-                                                {"max", jsonNumber(s.filterErrorMax)},
-                                                {"samples", s.filterErrorSamples}}}});
-        }
-        nlohmann::json j = {{"file", file.string()},
-                            {"kind", "vto"},
-                            {"version", check.version},
-                            {"resolution", tree.resolution()},
-                            {"levels", tree.levelCount()},
-                            {"cyclic", info.source.cyclic},
-                            {"filter", std::string(octree::filterRuleName(info.rule))},
-                            {"tolerance", jsonNumber(info.tolerance)},
-                            {"stored_nodes", tree.storedNodes()},
-                            {"compression", jsonNumber(tree.compression())},
-                            {"source_triangles", info.source.sourceTriangles},
-                            {"source_area", jsonNumber(info.source.sourceArea)},
-                            {"fit_error", {{"mean", jsonNumber(info.source.fitError.mean)},
-                                           {"max", jsonNumber(info.source.fitError.max)},
-                                           {"samples", info.source.fitError.samples}}},
-                            {"per_level", levels},
-                            {"checksums", checksumsJson(check)}};
-        if (tree.measures) {
-            const octree::SourceMeasures& m = *tree.measures;
-            j["source_measures"] = {{"tau", jsonNumber(m.tau)},
-                                    {"tolerance", jsonNumber(m.tolerance)},
-                                    {"faithful_levels", {m.faithfulCoarsest, m.faithfulFinest}},
-                                    {"mesh_level", m.meshLevel},
-                                    {"level_scales", m.levelScales},
-                                    {"shadow_levels", m.shadowLevels},
-                                    {"own_shares", m.ownShares}};
-        }
-        if (tree.layerMeans) {
-            // The coarse levels' density profile's layer means (octree::LayerMeans, the PROF section).
-            const octree::LayerMeans& m = *tree.layerMeans;
-            j["density_profile"] = {{"level", m.level}, {"x", m.axis[0]}, {"y", m.axis[1]}, {"z", m.axis[2]}};
-        }
-        out << j.dump() << '\n';
-        return;
+    nlohmann::json levels = nlohmann::json::array();
+    for (std::uint32_t l = 0; l < tree.levelCount(); ++l) {
+        const auto& s = tree.stats[l];
+        levels.push_back({{"level", l},
+                          {"chords_against_source", fidelityJson(measures, l)},
+                          {"resolution", 1u << l},
+                          {"stored_nodes", s.storedNodes},
+                          {"occupied_nodes", s.occupiedNodes},
+                          {"mean_density", jsonNumber(s.meanDensity)},
+                          {"mean_occupied_density", jsonNumber(s.meanOccupiedDensity)},
+                          {"filter_error", {{"mean", jsonNumber(s.filterErrorMean)},
+                                            {"max", jsonNumber(s.filterErrorMax)},
+                                            {"samples", s.filterErrorSamples}}}});
     }
+    nlohmann::json j = {{"file", file.string()},
+                        {"kind", "vto"},
+                        {"version", check.version},
+                        {"resolution", tree.resolution()},
+                        {"levels", tree.levelCount()},
+                        {"cyclic", info.source.cyclic},
+                        {"filter", std::string(octree::filterRuleName(info.rule))},
+                        {"tolerance", jsonNumber(info.tolerance)},
+                        {"stored_nodes", tree.storedNodes()},
+                        {"compression", jsonNumber(tree.compression())},
+                        {"source_triangles", info.source.sourceTriangles},
+                        {"source_area", jsonNumber(info.source.sourceArea)},
+                        {"fit_error", {{"mean", jsonNumber(info.source.fitError.mean)},
+                                       {"max", jsonNumber(info.source.fitError.max)},
+                                       {"samples", info.source.fitError.samples}}},
+                        {"per_level", levels},
+                        {"checksums", checksumsJson(check)}};
+    if (tree.measures) {
+        const octree::SourceMeasures& m = *tree.measures;
+        j["source_measures"] = {{"tau", jsonNumber(m.tau)},
+                                {"tolerance", jsonNumber(m.tolerance)},
+                                {"faithful_levels", {m.faithfulCoarsest, m.faithfulFinest}},
+                                {"mesh_level", m.meshLevel},
+                                {"level_scales", m.levelScales},
+                                {"shadow_levels", m.shadowLevels},
+                                {"own_shares", m.ownShares}};
+    }
+    if (tree.layerMeans) {
+        // The coarse levels' density profile's layer means (octree::LayerMeans, the PROF section).
+        const octree::LayerMeans& m = *tree.layerMeans;
+        j["density_profile"] = {{"level", m.level}, {"x", m.axis[0]}, {"y", m.axis[1]}, {"z", m.axis[2]}};
+    }
+    out << j.dump() << '\n';
+}
+
+// What `vtex build --source` stored for renders (render::measureSource), as text.
+void printSourceMeasures(const octree::SourceMeasures& m, std::ostream& out) {
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "source measures (vtex build --source, for tau %g, tolerance %g): faithful levels %d-%d, mesh "
+                  "level %d, %zu level scales, %zu shadow levels\n",
+                  m.tau, m.tolerance, int(m.faithfulCoarsest), int(m.faithfulFinest), int(m.meshLevel),
+                  m.levelScales.size(), m.shadowLevels.size());
+    out << line;
+    if (m.ownShares.empty()) return;
+    // A lit voxel's own leaf (docs/render.md): the share of its matter a shadow query from it
+    // takes off its own voxel, per level.
+    out << "own shares by level:";
+    for (const double s : m.ownShares) {
+        std::snprintf(line, sizeof line, " %.3f", s);
+        out << line;
+    }
+    out << '\n';
+}
+
+// The coarse levels' density profile (octree::DensityProfile): its height profile, a few layers
+// of the profile level, bottom to top, as a share of the level's mean.
+void printDensityProfile(const octree::LayerMeans& m, std::ostream& out) {
+    char line[64];
+    const std::size_t layers = m.axis[2].size(), every = std::max<std::size_t>(1, layers / 8);
+    double mean = 0;
+    for (const double v : m.axis[2]) mean += v / double(layers);
+    out << "density profile (level " << m.level << " layer means, stored by the build): layers 0, " << every << ", "
+        << 2 * every << " ... bottom to top, over the mean:";
+    for (std::size_t k = 0; k < layers; k += every) {
+        std::snprintf(line, sizeof line, " %.2f", mean > 0 ? m.axis[2][k] / mean : 0.0);
+        out << line;
+    }
+    out << '\n';
+}
+
+// The report as text: the octree, its levels, what the build stored, the source's chords.
+void printVto(const std::filesystem::path& file, const octree::FileCheck& check, const octree::Octree& tree,
+              const render::SourceFidelity& measures, const InspectOptions& options, std::ostream& out) {
+    const auto& info = tree.info;
     char line[512];
     out << file.string() << ": octree (.vto version " << check.version << ")\n";
     std::snprintf(line, sizeof line, "resolution: %u^3, %u levels%s; filter %s, tolerance %g\n", tree.resolution(),
@@ -109,43 +141,23 @@ void inspectVto(const std::filesystem::path& file, const InspectOptions& options
                       (unsigned long long)s.filterErrorSamples);
         out << line;
     }
-    if (tree.measures) {
-        // What `vtex build --source` stored for renders (render::measureSource).
-        const octree::SourceMeasures& m = *tree.measures;
-        std::snprintf(line, sizeof line,
-                      "source measures (vtex build --source, for tau %g, tolerance %g): faithful levels %d-%d, mesh "
-                      "level %d, %zu level scales, %zu shadow levels\n",
-                      m.tau, m.tolerance, int(m.faithfulCoarsest), int(m.faithfulFinest), int(m.meshLevel),
-                      m.levelScales.size(), m.shadowLevels.size());
-        out << line;
-        if (!m.ownShares.empty()) {
-            // A lit voxel's own leaf (docs/render.md): the share of its matter a shadow query
-            // from it takes off its own voxel, per level.
-            out << "own shares by level:";
-            for (const double s : m.ownShares) {
-                std::snprintf(line, sizeof line, " %.3f", s);
-                out << line;
-            }
-            out << '\n';
-        }
-    }
-    if (tree.layerMeans) {
-        // The coarse levels' density profile (octree::DensityProfile): its height profile, a few
-        // layers of the profile level, bottom to top, as a share of the level's mean.
-        const octree::LayerMeans& m = *tree.layerMeans;
-        const std::size_t layers = m.axis[2].size(), every = std::max<std::size_t>(1, layers / 8);
-        double mean = 0;
-        for (const double v : m.axis[2]) mean += v / double(layers);
-        out << "density profile (level " << m.level << " layer means, stored by the build): layers 0, " << every
-            << ", " << 2 * every << " ... bottom to top, over the mean:";
-        for (std::size_t k = 0; k < layers; k += every) {
-            std::snprintf(line, sizeof line, " %.2f", mean > 0 ? m.axis[2][k] / mean : 0.0);
-            out << line;
-        }
-        out << '\n';
-    }
+    if (tree.measures) printSourceMeasures(*tree.measures, out);
+    if (tree.layerMeans) printDensityProfile(*tree.layerMeans, out);
     printFidelity(measures, options.source, out);
     printChecksums(check, out);
+}
+
+void inspectVto(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out) {
+    const std::string bytes = octree::readFileBytes(file);
+    const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTO", 8), octree::kVtoVersion);
+    if (!check.problem.empty()) {
+        if (options.json) out << nlohmann::json{{"file", file.string()}, {"checksums", checksumsJson(check)}}.dump() << '\n';
+        else printChecksums(check, out);
+    }
+    const octree::Octree tree = octree::parseVto(bytes, file);  // throws on any problem
+    const render::SourceFidelity measures = measuresAgainstSource(tree, options.source);
+    if (options.json) writeVtoJson(file, check, tree, measures, out);
+    else printVto(file, check, tree, measures, options, out);
 }
 
 const bool registered = registerInspector(".vto", inspectVto);
