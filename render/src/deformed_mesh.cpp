@@ -19,7 +19,17 @@
 #include <stdexcept>
 
 namespace vtex::render::detail {
+
+/// One cell's deformed triangles, before they go into the scene.
+struct DeformedMesh::CellOutput {
+    std::vector<Eigen::Vector3f> vertices;  // 3 per triangle
+    std::vector<std::uint32_t> sourceTriangle;
+    std::vector<Eigen::Vector2f> barycentric;  // 3 per triangle
+};
+
 namespace {
+
+using CellOutput = DeformedMesh::CellOutput;
 
 // Subdivision stops here whatever the tolerance: 4^8 pieces per source triangle.
 constexpr int kMaxSubdivision = 8;
@@ -50,12 +60,6 @@ void clipPlane(const ClipPolygon& in, int axis, double c, double sign, ClipPolyg
         }
     }
 }
-
-struct CellOutput {
-    std::vector<Eigen::Vector3f> vertices;  // 3 per triangle
-    std::vector<std::uint32_t> sourceTriangle;
-    std::vector<Eigen::Vector2f> barycentric;  // 3 per triangle
-};
 
 // The whole-unit copies of the reference volume a cell shows: its CellMap's rectangle [lo, hi],
 // copies first … end − 1 along x and y.
@@ -127,29 +131,72 @@ private:
     CellOutput& mOut;
 };
 
+// The primitives whose surface carries a texel, and what deforming their sources would make at
+// least (every source triangle in every copy a cell shows once; the wrapped copies only add the
+// pieces that stick out, so they are not counted in full), and the cells' mean size.
+struct TexturedCells {
+    std::vector<std::size_t> prims;
+    double triangleEstimate = 0;
+    double meanSize = 1;
+};
+TexturedCells texturedCells(const PrimTable& prims, const std::vector<SurfaceRuntime>& surfaces,
+                            const std::vector<const SourceBvh*>& sources) {
+    TexturedCells out;
+    double lengthSum = 0;
+    for (std::size_t i = 0; i < prims.size(); ++i) {
+        const Prim prim = prims[i];
+        const SurfaceRuntime& s = surfaces[std::size_t(prim.surface)];
+        if (s.texel < 0) continue;
+        out.prims.push_back(i);
+        lengthSum += prim.cell.size();
+        const SourceBvh& source = *sources[std::size_t(s.texel)];
+        const double wraps = double(source.shiftMax()[0] - source.shiftMin()[0] + 1) *
+                             double(source.shiftMax()[1] - source.shiftMin()[1] + 1);
+        out.triangleEstimate += double(CellTiles(prim.map).count()) * double(source.triangleCount()) * (wraps > 1 ? 1.1 : 1.0);
+    }
+    if (!out.prims.empty()) out.meanSize = lengthSum / double(out.prims.size());
+    return out;
+}
+
+// Deforms `source` into the cell of `prim`: each source triangle, in each whole-unit copy of the
+// reference volume the cell shows and each of the source's wrap shifts, clipped to that copy
+// (within what the cell shows) and subdivided into `out` until within `tolerance`.
+void deformInto(const Prim& prim, const SourceBvh& source, double tolerance, CellOutput& out) {
+    const CellTiles tiles(prim.map);
+    const Eigen::Vector2d bary[3] = {{0, 0}, {1, 0}, {0, 1}};
+    for (std::uint32_t t = 0; t < source.triangleCount(); ++t) {
+        CellDeformer deformer(prim.cell, prim.map, tolerance, t, out);
+        const auto corners = source.triangle(t);
+        for (int tj = tiles.first[1]; tj < tiles.end[1]; ++tj)
+            for (int ti = tiles.first[0]; ti < tiles.end[0]; ++ti)
+                for (int sy = source.shiftMin()[1]; sy <= source.shiftMax()[1]; ++sy)
+                    for (int sx = source.shiftMin()[0]; sx <= source.shiftMax()[0]; ++sx) {
+                        const Vec3 shift(ti + sx, tj + sy, 0);
+                        // The copy [ti, ti + 1) × [tj, tj + 1), within what the cell shows.
+                        const Vec3 lo(std::max(double(ti), tiles.lo.x()), std::max(double(tj), tiles.lo.y()), 0);
+                        const Vec3 hi(std::min(ti + 1.0, tiles.hi.x()), std::min(tj + 1.0, tiles.hi.y()), 1);
+                        ClipPolygon a, b;
+                        a.count = 3;
+                        bool outside = false;
+                        for (int k = 0; k < 3; ++k) a.v[std::size_t(k)] = {corners[std::size_t(k)] + shift, bary[k]};
+                        for (int axis = 0; axis < 3 && !outside; ++axis) {
+                            clipPlane(a, axis, lo[axis], 1, b);
+                            clipPlane(b, axis, hi[axis], -1, a);
+                            outside = a.count < 3;
+                        }
+                        if (!outside) deformer.emitPolygon(a);
+                    }
+    }
+}
+
 }  // namespace
 
 DeformedMesh::DeformedMesh(const PrimTable& prims, const std::vector<SurfaceRuntime>& surfaces,
                            const std::vector<const SourceBvh*>& sources, double tolerance, std::uint64_t maxMemoryBytes,
                            const std::filesystem::path& sceneFile)
     : mSources(sources) {
-    std::vector<std::size_t> cells;
-    double estimate = 0, lengthSum = 0;
-    for (std::size_t i = 0; i < prims.size(); ++i) {
-        const Prim prim = prims[i];
-        const SurfaceRuntime& s = surfaces[std::size_t(prim.surface)];
-        if (s.texel < 0) continue;
-        cells.push_back(i);
-        lengthSum += prim.cell.size();
-        const SourceBvh& source = *sources[std::size_t(s.texel)];
-        const double wraps = double(source.shiftMax()[0] - source.shiftMin()[0] + 1) *
-                             double(source.shiftMax()[1] - source.shiftMin()[1] + 1);
-        // Every source triangle lands in every copy at least once; the wrapped copies only add
-        // the pieces that stick out, so they are not counted in full.
-        const CellTiles tiles(prim.map);
-        estimate += double(tiles.count()) * double(source.triangleCount()) * (wraps > 1 ? 1.1 : 1.0);
-    }
-    if (!cells.empty()) mLengthScale = lengthSum / double(cells.size());
+    const TexturedCells cells = texturedCells(prims, surfaces, sources);
+    mLengthScale = cells.meanSize;
     const double maxBytes = maxMemoryBytes > 0 ? double(maxMemoryBytes) : std::numeric_limits<double>::infinity();
     const auto refuse = [&](double triangles) {
         throw MemoryLimitError(sceneFile,
@@ -157,48 +204,27 @@ DeformedMesh::DeformedMesh(const PrimTable& prims, const std::vector<SurfaceRunt
                                    " triangles (--mode embedded needs none)",
                                std::uint64_t(std::min(triangles * kBytesPerTriangle, 1.8e19)), maxMemoryBytes);
     };
-    if (estimate * kBytesPerTriangle > maxBytes) refuse(estimate);
+    if (cells.triangleEstimate * kBytesPerTriangle > maxBytes) refuse(cells.triangleEstimate);
 
+    // Deformed per cell in parallel, stopping all cells once the triangles pass the limit.
     const double maxTriangles = maxBytes / kBytesPerTriangle;
-    std::vector<CellOutput> outputs(cells.size());
+    std::vector<CellOutput> outputs(cells.prims.size());
     std::atomic<std::uint64_t> total{0};
     std::atomic<bool> over{false};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, outputs.size()), [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t c = range.begin(); c != range.end() && !over.load(std::memory_order_relaxed); ++c) {
-            const Prim prim = prims[cells[c]];
-            const SurfaceRuntime& surface = surfaces[std::size_t(prim.surface)];
-            const SourceBvh& source = *sources[std::size_t(surface.texel)];
-            CellOutput& out = outputs[c];
-            const CellTiles tiles(prim.map);
-            for (std::uint32_t t = 0; t < source.triangleCount(); ++t) {
-                CellDeformer deformer(prim.cell, prim.map, tolerance, t, out);
-                const auto corners = source.triangle(t);
-                for (int tj = tiles.first[1]; tj < tiles.end[1]; ++tj)
-                    for (int ti = tiles.first[0]; ti < tiles.end[0]; ++ti)
-                        for (int sy = source.shiftMin()[1]; sy <= source.shiftMax()[1]; ++sy)
-                            for (int sx = source.shiftMin()[0]; sx <= source.shiftMax()[0]; ++sx) {
-                                const Vec3 shift(ti + sx, tj + sy, 0);
-                                // The copy [ti, ti + 1) × [tj, tj + 1), within what the cell shows.
-                                const Vec3 lo(std::max(double(ti), tiles.lo.x()), std::max(double(tj), tiles.lo.y()), 0);
-                                const Vec3 hi(std::min(ti + 1.0, tiles.hi.x()), std::min(tj + 1.0, tiles.hi.y()), 1);
-                                ClipPolygon a, b;
-                                a.count = 3;
-                                const Eigen::Vector2d bary[3] = {{0, 0}, {1, 0}, {0, 1}};
-                                bool outside = false;
-                                for (int k = 0; k < 3; ++k) a.v[std::size_t(k)] = {corners[std::size_t(k)] + shift, bary[k]};
-                                for (int axis = 0; axis < 3 && !outside; ++axis) {
-                                    clipPlane(a, axis, lo[axis], 1, b);
-                                    clipPlane(b, axis, hi[axis], -1, a);
-                                    outside = a.count < 3;
-                                }
-                                if (!outside) deformer.emitPolygon(a);
-                            }
-            }
-            if (double(total += out.sourceTriangle.size()) > maxTriangles) over = true;
+            const Prim prim = prims[cells.prims[c]];
+            deformInto(prim, *sources[std::size_t(surfaces[std::size_t(prim.surface)].texel)], tolerance, outputs[c]);
+            if (double(total += outputs[c].sourceTriangle.size()) > maxTriangles) over = true;
         }
     });
     if (over) refuse(double(total.load()));
+    std::vector<int> texelOfCell(outputs.size());
+    for (std::size_t c = 0; c < outputs.size(); ++c) texelOfCell[c] = surfaces[std::size_t(prims[cells.prims[c]].surface)].texel;
+    buildScene(outputs, texelOfCell);
+}
 
+void DeformedMesh::buildScene(std::vector<CellOutput>& outputs, const std::vector<int>& texelOfCell) {
     std::uint64_t count = 0;
     for (const CellOutput& out : outputs) count += out.sourceTriangle.size();
     mSourceTriangle.reserve(count);
@@ -224,14 +250,13 @@ DeformedMesh::DeformedMesh(const PrimTable& prims, const std::vector<SurfaceRunt
         std::size_t v = 0;
         for (std::size_t c = 0; c < outputs.size(); ++c) {
             CellOutput& out = outputs[c];
-            const int texel = surfaces[std::size_t(prims[cells[c]].surface)].texel;
             for (const Eigen::Vector3f& x : out.vertices) {
                 for (int a = 0; a < 3; ++a) vertices[3 * v + std::size_t(a)] = x[a];
                 indices[v] = std::uint32_t(v);
                 ++v;
             }
             mSourceTriangle.insert(mSourceTriangle.end(), out.sourceTriangle.begin(), out.sourceTriangle.end());
-            mTexel.insert(mTexel.end(), out.sourceTriangle.size(), std::uint32_t(texel));
+            mTexel.insert(mTexel.end(), out.sourceTriangle.size(), std::uint32_t(texelOfCell[c]));
             mBarycentric.insert(mBarycentric.end(), out.barycentric.begin(), out.barycentric.end());
             out = CellOutput{};  // release as we go: the peak stays near one copy
         }

@@ -46,7 +46,12 @@ public:
     /// vertices, indices and BVH, plus what a hit needs to find its colour.
     static constexpr double kBytesPerTriangle = 160;
 
+    struct CellOutput;
+
 private:
+    /// The Embree scene of the cells' triangles (`texelOfCell[c]`: cell c's texel), each cell's
+    /// output released as it is copied.
+    void buildScene(std::vector<CellOutput>& outputs, const std::vector<int>& texelOfCell);
     double selfIntersectionGap(const Vec3& o) const;
 
     const std::vector<const SourceBvh*>& mSources;
