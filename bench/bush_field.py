@@ -32,6 +32,22 @@ CAMERAS = {
 VIEWS = ['far', 'mid', 'near']
 GROUND = 20  # 20×20 unit quads in z = 0, centred on the origin
 SWEEP_STEPS = 12
+# The issue's light; LIGHT="x, y, z" (bush_field.sh's environment) lights the field from another
+# direction, to see how the texel's bias moves with the angle between the view and the light.
+DEFAULT_LIGHT = (-1.0, -0.5, -1.0)
+
+
+def light_direction():
+    text = os.environ.get('LIGHT', '')
+    if not text:
+        return DEFAULT_LIGHT
+    try:
+        d = tuple(float(x) for x in text.split(','))
+    except ValueError:
+        d = ()
+    if len(d) != 3 or not all(math.isfinite(x) for x in d) or not d[2] < 0:
+        sys.exit('bush_field.py: LIGHT must be three numbers "x, y, z" with z < 0 (a light from above), not %r' % text)
+    return d
 
 SCENE = '''[camera]
 position = [%.6f, %.6f, %.6f]
@@ -43,7 +59,7 @@ height   = %d
 
 [[light]]
 type      = "directional"
-direction = [-1, -0.5, -1]
+direction = [%s]
 color     = [3, 3, 3]
 
 [[texel]]
@@ -81,7 +97,8 @@ def write_ground(n=GROUND, path='ground.obj'):
 def write_scene(path, position, width, height, bush='bush', mesh='ground.obj', volume=None):
     """`volume` (default: `bush`) names the .vto, `bush` the source mesh beside it."""
     with open(path, 'w') as f:
-        f.write(SCENE % (tuple(position) + LOOK_AT + (width, height, volume or bush, bush, mesh)))
+        light = ', '.join('%g' % x for x in light_direction())
+        f.write(SCENE % (tuple(position) + LOOK_AT + (width, height, light, volume or bush, bush, mesh)))
 
 
 def grid(n, width, height):
@@ -411,6 +428,9 @@ def report(runs):
     md = ['# Bush field (issue 12)', '', 'Median of %d run(s) per row, `wall_seconds` of `--stats`; times against '
           'the references (× ref-16, × ref-1, the goals, dense / sparse) are the medians of the rounds\' own ratios; '
           'errors against the truth by `vtex compare` (bias = row mean / truth mean − 1).' % runs, '']
+    if light_direction() != DEFAULT_LIGHT:
+        md += ['The light travels along (%s) (LIGHT), not the issue\'s (−1, −0.5, −1): the goals below are '
+               'the issue\'s, for another scene.' % ', '.join('%g' % x for x in light_direction()), '']
     md += main_table(rows, truths)
     md += ['', '## At equal error', '', 'The reference\'s time at each texel row\'s RMSE, by the reference\'s trend '
            'between its 1- and 16-spp rows (time ∝ RMSE^−b); below 1 the texel is faster at equal error.', '']

@@ -29,7 +29,8 @@
 # Writes DIR/bush_field.md and DIR/bush_field.csv, and prints the markdown.
 # Usage: bench/bush_field.sh VTEX_BINARY [DIR] [RUNS] [THREADS]
 #   (environment: WIDTH, HEIGHT (768×576), TRUTH_SPP (1024), TRUTH_SPP_NEAR (256), RUNS,
-#    THREADS, BEFORE, VARIANTS, DENSE, SWEEP, SWEEP_TRUTH_SPP, TRUTH_KEY, COMPARE_VTEX, PATTERN (bush);
+#    THREADS, BEFORE, VARIANTS, DENSE, SWEEP, SWEEP_TRUTH_SPP, TRUTH_KEY, COMPARE_VTEX, PATTERN (bush),
+#    LIGHT ("x, y, z", the light's direction of travel; the issue's -1, -0.5, -1);
 #    arguments win)
 set -eu
 VTEX=${1:?usage: bush_field.sh VTEX_BINARY [DIR] [RUNS] [THREADS]}
