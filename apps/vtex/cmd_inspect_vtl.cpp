@@ -111,12 +111,7 @@ void printVtlText(const std::filesystem::path& file, const octree::FileCheck& ch
 }
 
 void inspectVtl(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out) {
-    const std::string bytes = octree::readFileBytes(file);
-    const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTL", 8), octree::kVtlVersion);
-    if (!check.problem.empty()) {
-        if (options.json) out << nlohmann::json{{"file", file.string()}, {"checksums", checksumsJson(check)}}.dump() << '\n';
-        else printChecksums(check, out);
-    }
+    const auto [bytes, check] = readCheckedFile(file, std::string_view("VTEX.VTL", 8), octree::kVtlVersion, options.json, out);
     const octree::SparseVolume volume = octree::parseVtl(bytes, file);  // throws on any problem
     const VtlSummary summary = summarize(volume);
     if (options.json) printVtlJson(file, check, volume, summary, out);

@@ -148,12 +148,7 @@ void printVto(const std::filesystem::path& file, const octree::FileCheck& check,
 }
 
 void inspectVto(const std::filesystem::path& file, const InspectOptions& options, std::ostream& out) {
-    const std::string bytes = octree::readFileBytes(file);
-    const octree::FileCheck check = octree::checkFile(bytes, std::string_view("VTEX.VTO", 8), octree::kVtoVersion);
-    if (!check.problem.empty()) {
-        if (options.json) out << nlohmann::json{{"file", file.string()}, {"checksums", checksumsJson(check)}}.dump() << '\n';
-        else printChecksums(check, out);
-    }
+    const auto [bytes, check] = readCheckedFile(file, std::string_view("VTEX.VTO", 8), octree::kVtoVersion, options.json, out);
     const octree::Octree tree = octree::parseVto(bytes, file);  // throws on any problem
     const render::SourceFidelity measures = measuresAgainstSource(tree, options.source);
     if (options.json) writeVtoJson(file, check, tree, measures, out);
