@@ -93,25 +93,65 @@ octree::Octree buildOrUpdate(octree::SparseVolume volume, const octree::BuildOpt
     return builder->compress(progress);
 }
 
+struct BuildFlags {
+    std::string input;
+    std::string output;
+    std::string filter = "sggx";
+    double tolerance = 0;
+    std::uint64_t filterErrorSamples = 4096;
+    std::uint64_t maxMemory = 0;
+    int threads = 0;
+    std::string source;
+    double tau = 1;
+    std::string update;
+    std::string region;
+};
+
+// The build of `vtex build`: checks, reads, builds or updates, measures against --source, writes.
+void runBuild(const BuildFlags& flags, const GlobalOptions& global) {
+    const ThreadLimit threadLimit(flags.threads);
+    checkOutputPath(flags.output, {flags.input, flags.source, flags.update});  // before any work (atomic_file.h)
+    const std::uint64_t estimate = octree::estimateBuildMemory(flags.input);
+    checkMemoryEstimate(flags.input, "building its octree", estimate, flags.maxMemory);
+    keepFreedMemory(estimate);
+    // The source is loaded before the build, quiet or not: a bad --source fails (exit 3,
+    // naming it) before any work and leaves no .vto.
+    std::optional<ingest::TriangleMesh> source;
+    if (!flags.source.empty()) source = ingest::loadMesh(flags.source);
+    const auto start = std::chrono::steady_clock::now();
+    octree::SparseVolume volume = octree::readVtl(flags.input);
+    octree::BuildOptions options;
+    options.rule = *octree::parseFilterRule(flags.filter);
+    options.tolerance = flags.tolerance;
+    options.filterErrorSamples = flags.filterErrorSamples;
+    TerminalProgress progress(global);
+    std::string how;
+    octree::Octree tree = buildOrUpdate(std::move(volume), options, flags.update, flags.region, progress, how);
+    // What a render with the default options measures of the texel against the source at
+    // load (render::measureSource), stored in the file: a tree built or updated here never
+    // carries an earlier tree's measures, which were of other levels.
+    if (source) {
+        tree.measures = render::measureSource(tree, *source, flags.tau, render::RenderOptions{}.hybridTolerance,
+                                              flags.source);
+        how += ", source measures stored";
+    }
+    octree::writeVto(tree, flags.output);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    char line[1024];
+    std::snprintf(line, sizeof line, "%s: %u levels, %llu stored nodes, compression %.2f%%, %s, %.2f s -> %s",
+                  flags.input.c_str(), tree.levelCount(), (unsigned long long)tree.storedNodes(),
+                  100.0 * tree.compression(), how.c_str(), seconds, flags.output.c_str());
+    status(global, line);
+    if (source && global.verbosity() != Verbosity::Quiet)
+        printFidelity(render::measureSourceFidelity(tree, *source), flags.source, std::cerr);
+}
+
 const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
     app.name("build");
     app.description(
         "Build the octree of a sampled volume (.vtl → .vto): all levels, filtered (the paper's rule "
         "or SGGX), compressed within a tolerance");
-    struct Flags {
-        std::string input;
-        std::string output;
-        std::string filter = "sggx";
-        double tolerance = 0;
-        std::uint64_t filterErrorSamples = 4096;
-        std::uint64_t maxMemory = 0;
-        int threads = 0;
-        std::string source;
-        double tau = 1;
-        std::string update;
-        std::string region;
-    };
-    auto flags = std::make_shared<Flags>();
+    auto flags = std::make_shared<BuildFlags>();
     app.add_option("VOLUME", flags->input, "Sampled volume (.vtl)")->required();
     app.add_option("-o,--output", flags->output, "Octree to write (.vto)")->required();
     app.add_option("--filter", flags->filter,
@@ -151,43 +191,7 @@ const bool registered = registerCommand(30, [](CLI::App& app) -> Action {
                                   "minimum inclusive, maximum exclusive (as given to vtex sample --update)");
     update->needs(region);
     region->needs(update);
-    return [flags](const GlobalOptions& global) {
-        const ThreadLimit threadLimit(flags->threads);
-        checkOutputPath(flags->output, {flags->input, flags->source, flags->update});  // before any work (atomic_file.h)
-        const std::uint64_t estimate = octree::estimateBuildMemory(flags->input);
-        checkMemoryEstimate(flags->input, "building its octree", estimate, flags->maxMemory);
-        keepFreedMemory(estimate);
-        // The source is loaded before the build, quiet or not: a bad --source fails (exit 3,
-        // naming it) before any work and leaves no .vto.
-        std::optional<ingest::TriangleMesh> source;
-        if (!flags->source.empty()) source = ingest::loadMesh(flags->source);
-        const auto start = std::chrono::steady_clock::now();
-        octree::SparseVolume volume = octree::readVtl(flags->input);
-        octree::BuildOptions options;
-        options.rule = *octree::parseFilterRule(flags->filter);
-        options.tolerance = flags->tolerance;
-        options.filterErrorSamples = flags->filterErrorSamples;
-        TerminalProgress progress(global);
-        std::string how;
-        octree::Octree tree = buildOrUpdate(std::move(volume), options, flags->update, flags->region, progress, how);
-        // What a render with the default options measures of the texel against the source at
-        // load (render::measureSource), stored in the file: a tree built or updated here never
-        // carries an earlier tree's measures, which were of other levels.
-        if (source) {
-            tree.measures = render::measureSource(tree, *source, flags->tau, render::RenderOptions{}.hybridTolerance,
-                                                  flags->source);
-            how += ", source measures stored";
-        }
-        octree::writeVto(tree, flags->output);
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        char line[1024];
-        std::snprintf(line, sizeof line, "%s: %u levels, %llu stored nodes, compression %.2f%%, %s, %.2f s -> %s",
-                      flags->input.c_str(), tree.levelCount(), (unsigned long long)tree.storedNodes(),
-                      100.0 * tree.compression(), how.c_str(), seconds, flags->output.c_str());
-        status(global, line);
-        if (source && global.verbosity() != Verbosity::Quiet)
-            printFidelity(render::measureSourceFidelity(tree, *source), flags->source, std::cerr);
-    };
+    return [flags](const GlobalOptions& global) { runBuild(*flags, global); };
 });
 
 }  // namespace
