@@ -46,6 +46,7 @@ public:
     /// vertices, indices and BVH, plus what a hit needs to find its colour.
     static constexpr double kBytesPerTriangle = 160;
 
+    /// One cell's deformed triangles while the constructor makes them (deformed_mesh.cpp).
     struct CellOutput;
 
 private:
