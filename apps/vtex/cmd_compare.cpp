@@ -1,5 +1,6 @@
-// `vtex compare a.exr b.exr [--json] [--diff heat.png]`: RMSE, PSNR and SSIM between two images, the
-// channel means and a's bias against b, and the RMSE split into 4×4-block and pixel scales.
+// `vtex compare a.exr b.exr [--json] [--diff heat.png] [--bands N]`: RMSE, PSNR and SSIM between two
+// images, the channel means and a's bias against b, the RMSE split into 4×4-block and pixel
+// scales, and optionally the means, bias and RMSE per band of rows.
 #include "cli.h"
 #include "json_number.h"
 
@@ -56,6 +57,28 @@ std::string percent(double bias) {
     return text;
 }
 
+nlohmann::json bandsJson(const std::vector<render::BandComparison>& bands) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& band : bands)
+        j.push_back({{"rows", {band.firstRow, band.endRow}},
+                     {"mean_a", triple(band.meanA, false)},
+                     {"mean_b", triple(band.meanB, false)},
+                     {"bias", triple(band.bias, true)},
+                     {"rmse", band.rmse}});
+    return j;
+}
+
+void printBands(const std::vector<render::BandComparison>& bands) {
+    char line[256];
+    for (const auto& band : bands) {
+        std::snprintf(line, sizeof line, "rows %d-%d  RMSE %.6g  mean A %.6g %.6g %.6g  mean B %.6g %.6g %.6g  ",
+                      band.firstRow, band.endRow - 1, band.rmse, band.meanA[0], band.meanA[1], band.meanA[2],
+                      band.meanB[0], band.meanB[1], band.meanB[2]);
+        std::cout << line << "bias " << percent(band.bias[0]) << ' ' << percent(band.bias[1]) << ' '
+                  << percent(band.bias[2]) << '\n';
+    }
+}
+
 void printText(const render::ImageComparison& c) {
     char line[512];
     std::snprintf(line, sizeof line, "RMSE %.6g  PSNR %s dB  SSIM %.6f  worst pixel (%d, %d) error %.6g\n", c.rmse,
@@ -76,12 +99,17 @@ const bool registered = registerCommand(60, [](CLI::App& app) -> Action {
     struct Options {
         std::string a, b, diff;
         bool json = false;
+        int bands = 0;
     };
     auto o = std::make_shared<Options>();
     app.add_option("A", o->a, "First image (.exr), e.g. the texel render")->required();
     app.add_option("B", o->b, "Second image (.exr), e.g. the reference")->required();
     app.add_flag("--json", o->json, "Print the metrics as JSON on stdout");
     app.add_option("--diff", o->diff, "Write a PNG heat map of the per-pixel error, full scale at the worst pixel");
+    app.add_option("--bands", o->bands,
+                   "Also measure N horizontal bands of rows, top to bottom (their means, A's bias and the RMSE): "
+                   "where in the image the error is")
+        ->check(CLI::Range(1, 16384));
     return [o](const GlobalOptions&) {
         if (!o->diff.empty()) checkOutputPath(o->diff, {o->a, o->b});  // before any work (atomic_file.h)
         const auto channelsA = render::comparedChannels(o->a);
@@ -99,12 +127,21 @@ const bool registered = registerCommand(60, [](CLI::App& app) -> Action {
             if (const auto p = render::firstUnmeasurablePixel(*image))
                 throw InputError(file, "pixel (" + std::to_string(p->first) + ", " + std::to_string(p->second) +
                                            ") is not finite or beyond ±1e30: such an image has no error to measure");
+        if (o->bands > a.height)
+            throw CLI::ValidationError("--bands", std::to_string(o->bands) + " bands, more than the images' " +
+                                                      std::to_string(a.height) + " rows");
         const render::ImageComparison c = render::compareImages(a, b);
+        const std::vector<render::BandComparison> bands =
+            o->bands > 0 ? render::compareRowBands(a, b, o->bands) : std::vector<render::BandComparison>{};
         if (!o->diff.empty()) render::writePng(render::errorHeatMap(a, b, c.worstError), o->diff);
-        if (o->json)
-            std::cout << toJson(c, o->a, o->b).dump(2) << '\n';
-        else
+        if (o->json) {
+            nlohmann::json j = toJson(c, o->a, o->b);
+            if (o->bands > 0) j["bands"] = bandsJson(bands);
+            std::cout << j.dump(2) << '\n';
+        } else {
             printText(c);
+            printBands(bands);
+        }
     };
 });
 

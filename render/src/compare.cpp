@@ -176,6 +176,37 @@ ImageComparison compareImages(const Image& a, const Image& b) {
     return result;
 }
 
+std::vector<BandComparison> compareRowBands(const Image& a, const Image& b, int bands) {
+    requireSameSize(a, b);
+    if (bands < 1 || bands > a.height)
+        throw std::invalid_argument("cannot cut " + std::to_string(a.height) + " rows into " + std::to_string(bands) + " bands");
+    std::vector<BandComparison> out;
+    out.resize(std::size_t(bands));
+    const std::size_t width = std::size_t(a.width);
+    for (int k = 0; k < bands; ++k) {
+        BandComparison& band = out[std::size_t(k)];
+        band.firstRow = int(std::int64_t(k) * a.height / bands);
+        band.endRow = int(std::int64_t(k + 1) * a.height / bands);
+        const std::size_t first = std::size_t(band.firstRow) * width, end = std::size_t(band.endRow) * width;
+        double squared = 0;
+        for (std::size_t p = first; p < end; ++p) {
+            squared += pixelSquaredError(a, b, p);
+            for (std::size_t c = 0; c < 3; ++c) {
+                band.meanA[c] += a.rgba[4 * p + c];
+                band.meanB[c] += b.rgba[4 * p + c];
+            }
+        }
+        const double pixels = double(end - first);
+        for (std::size_t c = 0; c < 3; ++c) {
+            band.meanA[c] /= pixels;
+            band.meanB[c] /= pixels;
+            band.bias[c] = band.meanB[c] != 0 ? band.meanA[c] / band.meanB[c] - 1 : std::numeric_limits<double>::quiet_NaN();
+        }
+        band.rmse = std::sqrt(squared / (3 * pixels));
+    }
+    return out;
+}
+
 Image errorHeatMap(const Image& a, const Image& b, double fullScale) {
     requireSameSize(a, b);
     if (!(fullScale > 0)) fullScale = 1;

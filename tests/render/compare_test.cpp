@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -188,6 +189,68 @@ TEST(Compare, WholeBlocksSplitTheSquaredErrorExactly) {
     for (double bias : self.bias) EXPECT_EQ(bias, 0);
 }
 
+// Bands of rows by hand: b is 0.5 everywhere, a the same but for its red in rows 4–6, 10 % higher.
+// Cut into 3 bands of 7 rows, [0, 2), [2, 4), [4, 7): the first two have no error; the third a red
+// bias of exactly +10 % and an RMSE of √(21 · 0.05² / 63) = 0.05/√3, its green and blue none.
+TEST(Compare, RowBandsSayWhichRowsTheErrorIsIn) {
+    Image b(8, 7, false);
+    for (std::size_t p = 0; p < b.pixels(); ++p)
+        for (int c = 0; c < 4; ++c) b.rgba[4 * p + std::size_t(c)] = c < 3 ? 0.5f : 1.0f;
+    Image a = b;
+    for (std::size_t p = 4 * 8; p < a.pixels(); ++p) a.rgba[4 * p] = 0.55f;
+    const auto bands = vtex::render::compareRowBands(a, b, 3);
+    ASSERT_EQ(bands.size(), 3u);
+    const int rows[4] = {0, 2, 4, 7};
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(bands[std::size_t(k)].firstRow, rows[k]);
+        EXPECT_EQ(bands[std::size_t(k)].endRow, rows[k + 1]);
+    }
+    for (int k = 0; k < 2; ++k) {
+        EXPECT_EQ(bands[std::size_t(k)].rmse, 0);
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(bands[std::size_t(k)].bias[std::size_t(c)], 0);
+    }
+    EXPECT_NEAR(bands[2].bias[0], 0.1, 1e-6);
+    EXPECT_EQ(bands[2].bias[1], 0);
+    EXPECT_EQ(bands[2].bias[2], 0);
+    EXPECT_NEAR(bands[2].rmse, 0.05 / std::sqrt(3.0), 1e-6);
+    EXPECT_THROW(vtex::render::compareRowBands(a, b, 0), std::invalid_argument);
+    EXPECT_THROW(vtex::render::compareRowBands(a, b, 8), std::invalid_argument);
+}
+
+// Any cut of two noise images: the bands cover every row once, and their means and squared errors
+// weighted by their pixels are the whole image's (one band is the whole comparison).
+TEST(Compare, RowBandsAddUpToTheWholeImage) {
+    const Image a = noiseImage(13, 29, 11), b = noiseImage(13, 29, 12);
+    const auto whole = compareImages(a, b);
+    for (const int n : {1, 2, 5, 7, 29}) {
+        const auto bands = vtex::render::compareRowBands(a, b, n);
+        ASSERT_EQ(bands.size(), std::size_t(n));
+        std::array<double, 3> meanA{}, meanB{};
+        double squared = 0;
+        int next = 0;
+        for (const auto& band : bands) {
+            EXPECT_EQ(band.firstRow, next);
+            EXPECT_GT(band.endRow, band.firstRow);
+            next = band.endRow;
+            const double pixels = 13.0 * (band.endRow - band.firstRow);
+            for (std::size_t c = 0; c < 3; ++c) {
+                meanA[c] += band.meanA[c] * pixels / (13.0 * 29);
+                meanB[c] += band.meanB[c] * pixels / (13.0 * 29);
+            }
+            squared += band.rmse * band.rmse * 3 * pixels;
+        }
+        EXPECT_EQ(next, 29);
+        for (std::size_t c = 0; c < 3; ++c) {
+            EXPECT_NEAR(meanA[c], whole.meanA[c], 1e-12);
+            EXPECT_NEAR(meanB[c], whole.meanB[c], 1e-12);
+        }
+        EXPECT_NEAR(std::sqrt(squared / (3 * 13.0 * 29)), whole.rmse, 1e-12);
+        if (n == 1) {
+            for (std::size_t c = 0; c < 3; ++c) EXPECT_NEAR(bands[0].bias[c], whole.bias[c], 1e-12);
+        }
+    }
+}
+
 TEST(Compare, CommandLineReportsTheMetricsAndWritesAHeatMap) {
     const Image a = noiseImage(16, 12, 5);
     Image b = a;
@@ -226,6 +289,23 @@ TEST(Compare, CommandLineReportsTheMetricsAndWritesAHeatMap) {
     ASSERT_EQ(text.exitStatus, 0) << text.err;
     EXPECT_NE(text.out.find("RMSE 4x4 blocks"), std::string::npos) << text.out;
     EXPECT_NE(text.out.find("bias "), std::string::npos) << text.out;
+
+    // --bands: the rows cut top to bottom, in the JSON and one line each in the text; more bands
+    // than rows is a usage error.
+    const auto banded = runVtex({"compare", scratch("a.exr").string(), scratch("b.exr").string(), "--json", "--bands", "5"});
+    ASSERT_EQ(banded.exitStatus, 0) << banded.err;
+    const auto jn = nlohmann::json::parse(banded.out);
+    ASSERT_EQ(jn["bands"].size(), 5u);
+    EXPECT_EQ(jn["bands"][0]["rows"][0].get<int>(), 0);
+    EXPECT_EQ(jn["bands"][4]["rows"][1].get<int>(), 12);
+    for (const auto& band : jn["bands"]) EXPECT_NEAR(band["rmse"].get<double>(), 0.1 / std::sqrt(3.0), 1e-6);
+    const auto bandText = runVtex({"compare", scratch("a.exr").string(), scratch("b.exr").string(), "--bands", "3"});
+    ASSERT_EQ(bandText.exitStatus, 0) << bandText.err;
+    EXPECT_NE(bandText.out.find("rows 8-11"), std::string::npos) << bandText.out;
+    const auto tooMany = runVtex({"compare", scratch("a.exr").string(), scratch("b.exr").string(), "--bands", "13"});
+    EXPECT_EQ(tooMany.exitStatus, 2) << tooMany.err;
+    EXPECT_EQ(runVtex({"compare", scratch("a.exr").string(), scratch("b.exr").string(), "--json"}).out.find("bands"),
+              std::string::npos);
 }
 
 TEST(Compare, ImagesThatCannotBeComparedAreBadInput) {

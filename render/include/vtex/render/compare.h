@@ -44,6 +44,20 @@ struct ImageComparison {
     double rmsePixel = 0;                                       ///< RMSE of the residuals below 4×4
 };
 
+/// One horizontal band of rows of two compared images: where in the image the error is (a far
+/// view's distant rows against its near ones, say).
+struct BandComparison {
+    int firstRow = 0, endRow = 0;             ///< rows [firstRow, endRow), row 0 at the top
+    std::array<double, 3> meanA{}, meanB{};   ///< mean R, G, B over the band's pixels
+    std::array<double, 3> bias{};             ///< meanA / meanB − 1 per channel; NaN where meanB is 0
+    double rmse = 0;                          ///< over the band's pixels and R, G, B
+};
+
+/// The images cut into `bands` bands of rows, band k holding rows [k·h/bands, (k+1)·h/bands)
+/// (so every row is in one band, and the bands' sizes differ by one row at most). Throws
+/// std::invalid_argument when the sizes differ or bands is not in [1, height].
+std::vector<BandComparison> compareRowBands(const Image& a, const Image& b, int bands);
+
 /// The first pixel (x, y) with a colour channel that is not finite or is beyond ±1e30, if any:
 /// such an image has no RMSE (inf prints as null) and its SSIM overflows (its squares reach
 /// float's range); callers refuse it naming the file.
