@@ -18,6 +18,8 @@ variants, and the image's RMSE against DIR/truth_VIEW.exr (bush_field.sh's truth
 With BORDER=K in the environment, the ground seen and the lit ground are also split between the
 field's interior and its K outer rows of cells (the ground written as inner.obj and ring.obj, the
 other part black; truths cached as DIR/truth_VIEW_{gcov,bl}{in,ring}.exr): one more row per view.
+With BANDS=N, a second table gives each variant's green bias per band of N bands of the image's
+rows, top (far from the camera) to bottom (`vtex compare --bands`); "–" where the truth is black.
 
 Usage: bench/bush_field_decompose.py VTEX DIR [SPP] [-- RENDER ARGS...]
   e.g. bench/bush_field_decompose.py build/apps/vtex/vtex /tmp/bfbench 256 -- --level-fit off
@@ -47,9 +49,17 @@ def variant(text, name):
     return text.replace(GROUND, GROUND.replace('diffuse = [0.35, 0.28, 0.2]', 'diffuse = [0, 0, 0]'))
 
 
-def compare(vtex, a, b):
-    out = subprocess.run([vtex, 'compare', a, b, '--json'], check=True, capture_output=True, text=True).stdout
-    return json.loads(out)
+NAMES = {'gcov': 'ground seen', 'bl': 'lit ground', 'lcov': 'leaves seen', 'bg': 'lit leaves'}
+
+
+def compare(vtex, a, b, bands=0):
+    args = [vtex, 'compare', a, b, '--json'] + (['--bands', str(bands)] if bands else [])
+    return json.loads(subprocess.run(args, check=True, capture_output=True, text=True).stdout)
+
+
+def band_biases(comparison):
+    """The green bias per band, in %, or None where the truth's band is black."""
+    return [None if band['bias'][1] is None else 100 * band['bias'][1] for band in comparison.get('bands', [])]
 
 
 def split_ground(border):
@@ -98,6 +108,8 @@ def main():
     vtex, folder = os.path.abspath(args[0]), args[1]
     spp = args[2] if len(args) > 2 else '256'
     border = int(os.environ['BORDER']) if os.environ.get('BORDER') else None
+    bands = int(os.environ['BANDS']) if os.environ.get('BANDS') else 0
+    by_band = []  # (row label, green bias per band)
     os.chdir(folder)
     if border is not None:
         split_ground(border)
@@ -115,9 +127,12 @@ def main():
             if not os.path.exists(truth):
                 subprocess.run([vtex, 'reference', scene, '-o', truth, '--spp', spp, '-q'], check=True)
             subprocess.run([vtex, 'render', scene, '-o', 'decompose.exr', '-q'] + extra, check=True)
-            biases.append(100 * compare(vtex, 'decompose.exr', truth)['bias'][1])
+            c = compare(vtex, 'decompose.exr', truth, bands)
+            biases.append(100 * c['bias'][1])
+            by_band.append(('%s %s' % (view, NAMES[name]), band_biases(c)))
         subprocess.run([vtex, 'render', view + '.toml', '-o', 'decompose.exr', '-q'] + extra, check=True)
-        image = compare(vtex, 'decompose.exr', 'truth_%s.exr' % view)
+        image = compare(vtex, 'decompose.exr', 'truth_%s.exr' % view, bands)
+        by_band.append(('%s image' % view, band_biases(image)))
         print('| %s | %s | %s | %.5f |' % (view, ' / '.join('%+.1f' % (100 * b) for b in image['bias']),
                                            ' / '.join('%+.1f' % b for b in biases), image['rmse']))
         if border is not None:
@@ -131,9 +146,17 @@ def main():
                     if not os.path.exists(truth):
                         subprocess.run([vtex, 'reference', scene, '-o', truth, '--spp', spp, '-q'], check=True)
                     subprocess.run([vtex, 'render', scene, '-o', 'decompose.exr', '-q'] + extra, check=True)
-                    parts.append(100 * compare(vtex, 'decompose.exr', truth)['bias'][1])
+                    c = compare(vtex, 'decompose.exr', truth, bands)
+                    parts.append(100 * c['bias'][1])
+                    by_band.append(('%s %s, %s' % (view, NAMES[name], 'interior' if lit == 'in' else 'outer rows'),
+                                    band_biases(c)))
             print('| %s, interior / %d outer rows | ground seen / lit ground: %+.1f / %+.1f %% | %+.1f / %+.1f %% | |'
                   % (view, border, parts[0], parts[1], parts[2], parts[3]))
+    if bands:
+        print('\n| green bias %% by band of rows, top to bottom | %s |' % ' | '.join(str(k + 1) for k in range(bands)))
+        print('| --- |%s' % (' ---: |' * bands))
+        for label, values in by_band:
+            print('| %s | %s |' % (label, ' | '.join('–' if v is None else '%+.1f' % v for v in values)))
 
 
 if __name__ == '__main__':
