@@ -9,8 +9,8 @@
 // each voxel's ellipsoid and t_l its shadow at the shadow level with the voxel's own share taken
 // off, as the renderer lights it. Prints, per α and camera level, the two means' ratio.
 // With VIEW_ZENITH (degrees) every chord looks down at that angle instead of cosine-weighted, its
-// azimuth uniform, or within ±7° of VIEW_AZIMUTH (the direction from the texel to the eye, as a
-// camera over a field sees it); with a LIGHT too (its direction of travel, as in scene.toml), one
+// azimuth uniform (VIEW_AZIMUTH "random"), or within ±7° of VIEW_AZIMUTH (the direction from the
+// texel to the eye, as a camera over a field sees it); with a LIGHT too (its direction of travel, as in scene.toml), one
 // row for that light instead of the phase angles.
 //   usage: vtex_phase_lighting TEXEL.vto SOURCE_MESH [SHADOW_LEVEL] [CHORDS]
 //                              [VIEW_ZENITH [VIEW_AZIMUTH [LX LY LZ]]]
@@ -32,8 +32,9 @@
 #include <cstdlib>
 #include <exception>
 #include <limits>
-#include <optional>
 #include <numbers>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace {
@@ -61,7 +62,9 @@ int main(int argc, char** argv) {
         const int chords = argc > 4 ? std::atoi(argv[4]) : 8192;
         constexpr double kDegree = std::numbers::pi / 180;
         const double zenith = argc > 5 ? std::atof(argv[5]) * kDegree : -1;
-        const double azimuth = argc > 6 ? std::atof(argv[6]) * kDegree : std::numeric_limits<double>::quiet_NaN();
+        // "random" (or none): the chords' azimuths uniform.
+        const double azimuth = argc > 6 && std::string(argv[6]) != "random" ? std::atof(argv[6]) * kDegree
+                                                                            : std::numeric_limits<double>::quiet_NaN();
         std::optional<Vec3> fixedLight;  // toward the light
         if (argc > 9) fixedLight = -Vec3(std::atof(argv[7]), std::atof(argv[8]), std::atof(argv[9])).normalized();
         if ((argc > 5 && !(zenith >= 0 && zenith < std::numbers::pi / 2)) || (fixedLight && !(fixedLight->z() > 0))) {
@@ -84,16 +87,6 @@ int main(int argc, char** argv) {
         std::vector<double> meshSum(phases.size(), 0.0), litSum(phases.size(), 0.0);
         std::vector<std::vector<double>> volumeSum(3, std::vector<double>(phases.size(), 0.0));
         std::vector<double> count(phases.size(), 0.0);
-        const auto transmittanceUp = [&](const Vec3& p, const Vec3& l, double ownShare) {
-            // The shadow at the shadow level: the voxel p lies in times (1 − own share) to where
-            // the ray leaves it, then the rest to the top, through the tiled texel.
-            const double toTop = std::max(0.0, 1 - p.z()) / l.z();
-            const Vec3 end = p + octree::voxelExit(p, l, shadowLevel, toTop) * l;
-            const double depth = (1 - ownShare) * medium.depth(std::uint32_t(shadowLevel), p, end) +
-                                 octree::detail::chordDepth(medium, std::uint32_t(shadowLevel),
-                                                            octree::detail::tiledSegments(end, l * (std::max(0.0, 1 - end.z()) / l.z())));
-            return std::exp(-scales[std::size_t(shadowLevel)] * depth);
-        };
         for (int j = 0; j < chords; ++j) {
             octree::detail::ChordRng rng{octree::detail::mix64(0x5eedull ^ octree::detail::mix64(std::uint64_t(j)))};
             Segments chord;
@@ -122,7 +115,7 @@ int main(int argc, char** argv) {
                 Vec3 light = fixedLight.value_or(Vec3::UnitZ());
                 for (int tries = 0; !fixedLight && (tries == 0 || (light.z() < 0.1 && tries < 64)); ++tries)
                     light = around(view, alpha, 2 * std::numbers::pi * rng.next());
-                if (light.z() < 0.1) continue;
+                if (!fixedLight && light.z() < 0.1) continue;  // a drawn light this low: another chord
                 count[k] += 1;
                 if (hit) {
                     Vec3 n = hit->normal;
@@ -131,7 +124,7 @@ int main(int argc, char** argv) {
                     bool lit = cosine > 0;
                     if (lit) {
                         const Vec3 start = hitPoint + render::detail::kSelfIntersectionGap * light;
-                        for (const auto& [c, d] : octree::detail::tiledSegments(start, light * (std::max(0.0, 1 - start.z()) / light.z())))
+                        for (const auto& [c, d] : octree::detail::toTheTop(start, light))
                             if (bvh.occluded(c, d, 0.0)) {
                                 lit = false;
                                 break;
@@ -140,10 +133,10 @@ int main(int argc, char** argv) {
                     meshSum[k] += lit ? cosine / std::numbers::pi : 0.0;
                     litSum[k] += lit;
                 }
+                const primitive::ReflectanceKernel kernel(light, view, 20, 16, false);
                 for (int ci = 0; ci < 3; ++ci) {
                     const int c = cameraLevels[ci];
                     double transmittance = 1, radiance = 0;
-                    const primitive::ReflectanceKernel kernel(light, view, 20, 16, false);
                     for (const auto& [a, b] : chord) {
                         const Vec3 w = (b - a).normalized();
                         octree::DensityProfile::Line line(medium.profile(), c, a, w);
@@ -154,7 +147,9 @@ int main(int argc, char** argv) {
                             const double opacity = 1 - std::exp(-sigma * (t1 - t0));
                             if (!(opacity > 0) || transmittance < 1e-4) return;
                             const Vec3 p = a + 0.5 * (t0 + t1) * w;
-                            radiance += transmittance * opacity * transmittanceUp(p, light, own) * kernel(v.s).diffuse;
+                            const double shadow = std::exp(-scales[std::size_t(shadowLevel)] *
+                                                           octree::detail::shadowDepth(medium, std::uint32_t(shadowLevel), p, light, own));
+                            radiance += transmittance * opacity * shadow * kernel(v.s).diffuse;
                             transmittance *= 1 - opacity;
                         });
                     }

@@ -2,7 +2,7 @@
 // lit_fractions.cpp (and bench/chord_families.cpp): a counter-based generator (a pure function of
 // seed and chord index, so that a measure does not depend on the thread count), the isotropic
 // chords of inspect's measure, the shell's cosine-weighted directions, the
-// tiling of a segment into unit-cube pieces.
+// tiling of a segment into unit-cube pieces, a shadow ray's depth to the top.
 #pragma once
 
 #include <vtex/octree/chord_medium.h>
@@ -102,6 +102,19 @@ inline double chordDepth(const ChordMedium& medium, std::uint32_t level, const S
     double depth = 0;
     for (const auto& [a, b] : segments) depth += medium.depth(level, a, b);
     return depth;
+}
+
+/// The segments from p along the unit upward direction `up` to the top face, through the tiled texel.
+inline Segments toTheTop(const Vec3& p, const Vec3& up) { return tiledSegments(p, up * (std::max(0.0, 1 - p.z()) / up.z())); }
+
+/// The optical depth ∫ρÂ toward the top from p along the unit upward `up` at `level`, through the
+/// tiled texel, the density of the voxel p lies in times 1 − ownShare up to where the ray leaves it
+/// (voxelExit): a shadow ray from a lit voxel as the renderer's queries take it, the piece it
+/// lights not shadowing it (docs/render.md, "A lit voxel's own leaf").
+inline double shadowDepth(const ChordMedium& medium, std::uint32_t level, const Vec3& p, const Vec3& up, double ownShare) {
+    if (ownShare == 0) return chordDepth(medium, level, toTheTop(p, up));
+    const Vec3 end = p + voxelExit(p, up, int(level), std::max(0.0, 1 - p.z()) / up.z()) * up;
+    return (1 - ownShare) * medium.depth(level, p, end) + chordDepth(medium, level, toTheTop(end, up));
 }
 
 }  // namespace vtex::octree::detail

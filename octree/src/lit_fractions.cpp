@@ -17,6 +17,8 @@ namespace {
 using detail::ChordRng;
 using detail::mix64;
 using detail::Segments;
+using detail::shadowDepth;
+using detail::toTheTop;
 
 // The point of the chord at which its optical depth (∫ρÂ · scale) reaches `target`; the chord's
 // end where it never does (rounding). Inside a profiled voxel the density is taken as its mean
@@ -40,17 +42,6 @@ Vec3 pointAtDepth(const ChordMedium& medium, std::uint32_t level, const Segments
         if (found) return *found;
     }
     return segments.back().second;
-}
-
-// The segments from p along the unit upward direction `up` to the top face, through the tiled texel.
-Segments toTheTop(const Vec3& p, const Vec3& up) { return detail::tiledSegments(p, up * (std::max(0.0, 1 - p.z()) / up.z())); }
-
-// The optical depth toward the top from p along `up` at `level`, the density of the voxel p lies
-// in times 1 − ownShare up to where the ray leaves it (voxelExit).
-double shadowDepth(const ChordMedium& medium, std::uint32_t level, const Vec3& p, const Vec3& up, double ownShare) {
-    if (ownShare == 0) return detail::chordDepth(medium, level, toTheTop(p, up));
-    const Vec3 end = p + voxelExit(p, up, int(level), std::max(0.0, 1 - p.z()) / up.z()) * up;
-    return (1 - ownShare) * medium.depth(level, p, end) + detail::chordDepth(medium, level, toTheTop(end, up));
 }
 
 // What one chord gives: whether the mesh sees a surface there and lights it; per camera level the
