@@ -84,12 +84,21 @@ double meanSsim(const Image& a, const Image& b) {
     return sum / double(x.size());
 }
 
-std::array<double, 3> channelMeans(const Image& image) {
+// The mean R, G, B of the pixels [first, end) (row-major).
+std::array<double, 3> channelMeans(const Image& image, std::size_t first, std::size_t end) {
     std::array<double, 3> sum{};
-    for (std::size_t p = 0; p < image.pixels(); ++p)
+    for (std::size_t p = first; p < end; ++p)
         for (int c = 0; c < 3; ++c) sum[std::size_t(c)] += image.rgba[4 * p + std::size_t(c)];
-    for (double& s : sum) s /= double(image.pixels());
+    for (double& s : sum) s /= double(end - first);
     return sum;
+}
+
+// meanA / meanB − 1 per channel, NaN where meanB is 0.
+std::array<double, 3> relativeBias(const std::array<double, 3>& meanA, const std::array<double, 3>& meanB) {
+    std::array<double, 3> bias{};
+    for (std::size_t c = 0; c < 3; ++c)
+        bias[c] = meanB[c] != 0 ? meanA[c] / meanB[c] - 1 : std::numeric_limits<double>::quiet_NaN();
+    return bias;
 }
 
 constexpr int kBlock = 4;  // the coarse scale of the error split, in pixels
@@ -167,11 +176,9 @@ ImageComparison compareImages(const Image& a, const Image& b) {
     result.rmse = std::sqrt(mse);
     result.psnr = mse > 0 ? -10 * std::log10(mse) : std::numeric_limits<double>::infinity();
     result.ssim = meanSsim(a, b);
-    result.meanA = channelMeans(a);
-    result.meanB = channelMeans(b);
-    for (std::size_t c = 0; c < 3; ++c)
-        result.bias[c] = result.meanB[c] != 0 ? result.meanA[c] / result.meanB[c] - 1
-                                              : std::numeric_limits<double>::quiet_NaN();
+    result.meanA = channelMeans(a, 0, a.pixels());
+    result.meanB = channelMeans(b, 0, b.pixels());
+    result.bias = relativeBias(result.meanA, result.meanB);
     splitByScale(a, b, result);
     return result;
 }
@@ -180,8 +187,7 @@ std::vector<BandComparison> compareRowBands(const Image& a, const Image& b, int 
     requireSameSize(a, b);
     if (bands < 1 || bands > a.height)
         throw std::invalid_argument("cannot cut " + std::to_string(a.height) + " rows into " + std::to_string(bands) + " bands");
-    std::vector<BandComparison> out;
-    out.resize(std::size_t(bands));
+    std::vector<BandComparison> out(static_cast<std::size_t>(bands));
     const std::size_t width = std::size_t(a.width);
     for (int k = 0; k < bands; ++k) {
         BandComparison& band = out[std::size_t(k)];
@@ -189,19 +195,11 @@ std::vector<BandComparison> compareRowBands(const Image& a, const Image& b, int 
         band.endRow = int(std::int64_t(k + 1) * a.height / bands);
         const std::size_t first = std::size_t(band.firstRow) * width, end = std::size_t(band.endRow) * width;
         double squared = 0;
-        for (std::size_t p = first; p < end; ++p) {
-            squared += pixelSquaredError(a, b, p);
-            for (std::size_t c = 0; c < 3; ++c) {
-                band.meanA[c] += a.rgba[4 * p + c];
-                band.meanB[c] += b.rgba[4 * p + c];
-            }
-        }
+        for (std::size_t p = first; p < end; ++p) squared += pixelSquaredError(a, b, p);
+        band.meanA = channelMeans(a, first, end);
+        band.meanB = channelMeans(b, first, end);
+        band.bias = relativeBias(band.meanA, band.meanB);
         const double pixels = double(end - first);
-        for (std::size_t c = 0; c < 3; ++c) {
-            band.meanA[c] /= pixels;
-            band.meanB[c] /= pixels;
-            band.bias[c] = band.meanB[c] != 0 ? band.meanA[c] / band.meanB[c] - 1 : std::numeric_limits<double>::quiet_NaN();
-        }
         band.rmse = std::sqrt(squared / (3 * pixels));
     }
     return out;
